@@ -1,0 +1,9 @@
+//! GPU plumbing shared by every pass: context, readback, timing.
+
+pub mod context;
+pub mod layout;
+pub mod profiler;
+pub mod readback;
+
+pub use context::{adapter_summary, AdapterSummary, GpuContext};
+pub use profiler::{PassTimestamps, Profiler, TimingSource, Timings};

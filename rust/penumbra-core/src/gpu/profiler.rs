@@ -1,0 +1,191 @@
+//! Per-pass timing: GPU timestamp queries where the device has them, else CPU
+//! clocks around submit-and-wait of each pass (STYLE habit 6). The result says which.
+
+use std::time::Instant;
+
+use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimingSource {
+    GpuTimestamps,
+    CpuClock,
+}
+
+impl TimingSource {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TimingSource::GpuTimestamps => "gpu_timestamps",
+            TimingSource::CpuClock => "cpu_clock",
+        }
+    }
+}
+
+/// Milliseconds per named pass, in the order they ran.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Timings {
+    pub source: TimingSource,
+    pub passes: Vec<(String, f64)>,
+}
+
+/// Where a pass writes its begin and end timestamps.
+#[derive(Clone, Copy)]
+pub struct PassTimestamps<'q> {
+    set: &'q wgpu::QuerySet,
+    begin: u32,
+}
+
+impl<'q> PassTimestamps<'q> {
+    pub fn render(self) -> wgpu::RenderPassTimestampWrites<'q> {
+        wgpu::RenderPassTimestampWrites {
+            query_set: self.set,
+            beginning_of_pass_write_index: Some(self.begin),
+            end_of_pass_write_index: Some(self.begin + 1),
+        }
+    }
+    pub fn compute(self) -> wgpu::ComputePassTimestampWrites<'q> {
+        wgpu::ComputePassTimestampWrites {
+            query_set: self.set,
+            beginning_of_pass_write_index: Some(self.begin),
+            end_of_pass_write_index: Some(self.begin + 1),
+        }
+    }
+}
+
+/// Records named passes. With timestamps, all passes share one encoder and
+/// one submission; without, each pass is submitted and waited for alone.
+pub struct Profiler<'c> {
+    ctx: &'c GpuContext,
+    encoder: wgpu::CommandEncoder,
+    queries: Option<wgpu::QuerySet>,
+    names: Vec<String>,
+    cpu_ms: Vec<f64>,
+}
+
+/// Most passes one render may time.
+const MAX_PASSES: u32 = 32;
+
+impl<'c> Profiler<'c> {
+    pub fn new(ctx: &'c GpuContext, use_timestamps: bool) -> Self {
+        let queries = (use_timestamps && ctx.has_timestamps()).then(|| {
+            ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("penumbra::timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * MAX_PASSES,
+            })
+        });
+        Self {
+            ctx,
+            encoder: Self::new_encoder(ctx),
+            queries,
+            names: Vec::new(),
+            cpu_ms: Vec::new(),
+        }
+    }
+
+    fn new_encoder(ctx: &GpuContext) -> wgpu::CommandEncoder {
+        ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("penumbra::frame"),
+        })
+    }
+
+    pub fn source(&self) -> TimingSource {
+        if self.queries.is_some() {
+            TimingSource::GpuTimestamps
+        } else {
+            TimingSource::CpuClock
+        }
+    }
+
+    /// Records one named pass. `record` gets the encoder and, with timestamps,
+    /// where its (single) wgpu pass writes them.
+    pub fn pass(
+        &mut self,
+        name: &str,
+        record: impl FnOnce(&mut wgpu::CommandEncoder, Option<PassTimestamps<'_>>),
+    ) -> Result<()> {
+        let index = self.names.len() as u32;
+        if index >= MAX_PASSES {
+            return Err(Error::Gpu(format!("more than {MAX_PASSES} timed passes")));
+        }
+        self.names.push(name.to_owned());
+        match &self.queries {
+            Some(set) => {
+                record(&mut self.encoder, Some(PassTimestamps { set, begin: 2 * index }));
+            }
+            None => {
+                // Submit what came before so it is not counted in this pass.
+                self.flush()?;
+                let start = Instant::now();
+                record(&mut self.encoder, None);
+                self.flush()?;
+                self.cpu_ms.push(start.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+        Ok(())
+    }
+
+    /// The encoder for untimed work (readback copies).
+    pub fn encoder(&mut self) -> &mut wgpu::CommandEncoder {
+        &mut self.encoder
+    }
+
+    fn flush(&mut self) -> Result<()> {
+        let encoder = std::mem::replace(&mut self.encoder, Self::new_encoder(self.ctx));
+        self.ctx.queue.submit([encoder.finish()]);
+        self.ctx.wait()
+    }
+
+    /// Submits everything recorded, waits, and returns the pass timings.
+    pub fn finish(mut self) -> Result<(Timings, wgpu::CommandEncoder)> {
+        let source = self.source();
+        let passes = match self.queries.take() {
+            None => {
+                self.flush()?;
+                self.names.drain(..).zip(self.cpu_ms.drain(..)).collect()
+            }
+            Some(set) => {
+                let count = 2 * self.names.len() as u32;
+                let bytes = count as u64 * wgpu::QUERY_SIZE as u64;
+                let resolve = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("penumbra::timestamps_resolve"),
+                    size: bytes.max(8),
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let read = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("penumbra::timestamps_read"),
+                    size: bytes.max(8),
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                    mapped_at_creation: false,
+                });
+                if count > 0 {
+                    self.encoder.resolve_query_set(&set, 0..count, &resolve, 0);
+                    self.encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, bytes);
+                }
+                self.flush()?;
+                let period_ns = self.ctx.queue.get_timestamp_period() as f64;
+                let ticks: Vec<u64> = if count > 0 {
+                    read.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+                    self.ctx.wait()?;
+                    let view = read.slice(..).get_mapped_range().map_err(|e| {
+                        Error::Gpu(format!("mapping the timestamp buffer failed: {e}"))
+                    })?;
+                    bytemuck::pod_collect_to_vec(&view[..bytes as usize])
+                } else {
+                    Vec::new()
+                };
+                self.names
+                    .drain(..)
+                    .enumerate()
+                    .map(|(i, name)| {
+                        let (a, b) = (ticks[2 * i], ticks[2 * i + 1]);
+                        (name, b.saturating_sub(a) as f64 * period_ns * 1e-6)
+                    })
+                    .collect()
+            }
+        };
+        let encoder = Self::new_encoder(self.ctx);
+        Ok((Timings { source, passes }, encoder))
+    }
+}

@@ -1,0 +1,96 @@
+//! Texture readback. Rows are padded to `COPY_BYTES_PER_ROW_ALIGNMENT` for the
+//! copy and the padding is stripped here, in one place.
+
+use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
+
+/// A texture copy recorded into an encoder, waiting to be mapped.
+pub struct PendingReadback {
+    buffer: wgpu::Buffer,
+    width: u32,
+    height: u32,
+    row_bytes: u32,
+    padded_row_bytes: u32,
+}
+
+/// Records a copy of mip 0 of `texture` (all aspects must be one, e.g. a depth
+/// texture's depth) into a mappable buffer.
+pub fn copy_texture(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    aspect: wgpu::TextureAspect,
+) -> PendingReadback {
+    let (width, height) = (texture.width(), texture.height());
+    let bytes_per_texel = texture
+        .format()
+        .block_copy_size(Some(aspect))
+        .expect("readback of a format without a fixed texel size");
+    let row_bytes = width * bytes_per_texel;
+    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let padded_row_bytes = row_bytes.div_ceil(align) * align;
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("penumbra::readback"),
+        size: padded_row_bytes as u64 * height as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded_row_bytes),
+                rows_per_image: Some(height),
+            },
+        },
+        wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+    );
+    PendingReadback { buffer, width, height, row_bytes, padded_row_bytes }
+}
+
+impl PendingReadback {
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+}
+
+/// Maps every pending buffer (one wait for all), then hands each one's rows,
+/// padding stripped, to `unpack` in order.
+pub fn map_all(ctx: &GpuContext, pending: &[PendingReadback]) -> Result<Vec<Vec<u8>>> {
+    for p in pending {
+        p.buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    }
+    ctx.wait()?;
+    pending
+        .iter()
+        .map(|p| {
+            let view = p
+                .buffer
+                .slice(..)
+                .get_mapped_range()
+                .map_err(|e| Error::Gpu(format!("mapping a readback buffer failed: {e}")))?;
+            let mut out = Vec::with_capacity(p.row_bytes as usize * p.height as usize);
+            for row in view.chunks_exact(p.padded_row_bytes as usize) {
+                out.extend_from_slice(&row[..p.row_bytes as usize]);
+            }
+            drop(view);
+            p.buffer.unmap();
+            Ok(out)
+        })
+        .collect()
+}
+
+/// Reinterprets tightly packed little-endian texels as `T` (one copy, aligned).
+pub fn cast_vec<T: bytemuck::Pod>(bytes: Vec<u8>) -> Vec<T> {
+    bytemuck::pod_collect_to_vec(&bytes)
+}

@@ -1,0 +1,18 @@
+//! penumbra-core: headless soft-shadow rendering with wgpu. No Python here;
+//! `penumbra-py` binds it.
+
+pub mod error;
+pub mod gpu;
+pub mod image_io;
+pub mod light_frustum;
+pub mod methods;
+pub mod passes;
+pub mod renderer;
+pub mod scene;
+pub mod shaders;
+
+pub use error::{Error, Result};
+pub use gpu::{adapter_summary, AdapterSummary, TimingSource, Timings};
+pub use methods::{MethodConfig, ParamValue, METHODS};
+pub use renderer::{Image, ImageData, RenderOptions, RenderResult, Renderer};
+pub use scene::{Camera, Mesh, Scene, SphereLight};

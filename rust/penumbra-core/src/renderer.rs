@@ -1,0 +1,283 @@
+//! The long-lived renderer: owns the device and every pipeline (built once),
+//! and serves renders of any scene with any method.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use glam::Vec3;
+use wgpu::util::DeviceExt;
+
+use crate::error::{Error, Result};
+use crate::gpu::readback::{self, PendingReadback};
+use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
+use crate::light_frustum::LightFrustum;
+use crate::methods::hard::HardShadow;
+use crate::methods::{MethodConfig, ParamValue};
+use crate::passes::gbuffer::{GBuffer, GBufferPass};
+use crate::passes::shading::{ShadingPass, RADIANCE_FORMAT};
+use crate::passes::shadow_map::ShadowMapPass;
+use crate::scene::{Camera, PreparedScene, Scene};
+
+/// Pixel data of one output image.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ImageData {
+    F32(Vec<f32>),
+    I32(Vec<i32>),
+}
+
+/// A named output image: `shape` is (rows, columns) or (rows, columns, channels).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    pub name: String,
+    pub shape: Vec<usize>,
+    pub data: ImageData,
+}
+
+impl Image {
+    pub fn f32(&self) -> Option<&[f32]> {
+        match &self.data {
+            ImageData::F32(v) => Some(v),
+            ImageData::I32(_) => None,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct RenderOptions {
+    /// Also read back each method's intermediate images (shadow maps, masks).
+    pub intermediates: bool,
+}
+
+#[derive(Debug, Clone)]
+pub struct RenderResult {
+    pub method: &'static str,
+    pub params: BTreeMap<String, ParamValue>,
+    pub images: Vec<Image>,
+    pub timings: Timings,
+    /// Wall-clock time of the whole call, upload and readback included.
+    pub total_ms: f64,
+    pub stats: BTreeMap<String, i64>,
+}
+
+impl RenderResult {
+    pub fn image(&self, name: &str) -> Option<&Image> {
+        self.images.iter().find(|i| i.name == name)
+    }
+}
+
+pub struct Renderer {
+    ctx: GpuContext,
+    use_timestamps: bool,
+    gbuffer: GBufferPass,
+    shadow_map: ShadowMapPass,
+    shading: ShadingPass,
+    hard: HardShadow,
+}
+
+impl Renderer {
+    /// Creates the device and builds every pipeline. `use_timestamps` asks for
+    /// GPU timestamps; they are used only where the adapter has them.
+    pub fn new(use_timestamps: bool) -> Result<Self> {
+        let ctx = GpuContext::new()?;
+        let device = &ctx.device;
+        let (gbuffer, shadow_map, shading, hard) = ctx.scoped(|| {
+            Ok((
+                GBufferPass::new(device),
+                ShadowMapPass::new(device),
+                ShadingPass::new(device),
+                HardShadow::new(device),
+            ))
+        })?;
+        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard })
+    }
+
+    pub fn adapter(&self) -> &AdapterSummary {
+        &self.ctx.summary
+    }
+
+    /// Whether this renderer's timings come from GPU timestamps.
+    pub fn uses_timestamps(&self) -> bool {
+        self.use_timestamps && self.ctx.has_timestamps()
+    }
+
+    fn check_limits(&self, camera: &Camera, method: &MethodConfig) -> Result<()> {
+        let max = self.ctx.device.limits().max_texture_dimension_2d;
+        if camera.width > max || camera.height > max {
+            return Err(Error::InvalidCamera(format!(
+                "image of {}x{} exceeds this adapter's largest texture side, {max}",
+                camera.width, camera.height
+            )));
+        }
+        let MethodConfig::Hard(p) = method;
+        if p.map_size > max {
+            return Err(Error::InvalidParameter(format!(
+                "map_size {} exceeds this adapter's largest texture side, {max}",
+                p.map_size
+            )));
+        }
+        Ok(())
+    }
+
+    pub fn render(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        method: &MethodConfig,
+        options: &RenderOptions,
+    ) -> Result<RenderResult> {
+        let start = Instant::now();
+        camera.validate()?;
+        self.check_limits(camera, method)?;
+        let prepared = scene.prepare()?;
+        let corner_bytes = (prepared.corners.len() * std::mem::size_of::<crate::scene::CornerVertex>()) as u64;
+        if prepared.corners.len() > u32::MAX as usize || corner_bytes > self.ctx.device.limits().max_buffer_size {
+            return Err(Error::InvalidScene(format!(
+                "{} triangles exceed what this adapter can hold in one buffer",
+                prepared.triangle_count
+            )));
+        }
+        let frustum = LightFrustum::fit(
+            Vec3::from(scene.light.center),
+            prepared.corners.iter().map(|c| Vec3::from(c.position)),
+        )?;
+        let mut result = self.ctx.scoped(|| self.record_and_read(scene, camera, method, options, &prepared, &frustum))?;
+        result.total_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(result)
+    }
+
+    fn record_and_read(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        method: &MethodConfig,
+        options: &RenderOptions,
+        prepared: &PreparedScene,
+        frustum: &LightFrustum,
+    ) -> Result<RenderResult> {
+        let device = &self.ctx.device;
+        let size = (camera.width, camera.height);
+        let vertex_count = prepared.corners.len() as u32;
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("renderer::corners"),
+            contents: bytemuck::cast_slice(&prepared.corners),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let gbuffer = GBuffer::new(device, size);
+        let visibility = ShadingPass::create_visibility(device, size);
+        let radiance = crate::gpu::layout::create_texture(
+            device,
+            "renderer::radiance",
+            size,
+            RADIANCE_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        );
+        let (projection, _, _) = camera.projection(prepared.bounds_min, prepared.bounds_max);
+        let mut profiler = Profiler::new(&self.ctx, self.use_timestamps);
+        profiler.pass("gbuffer", |encoder, ts| {
+            self.gbuffer.record(device, encoder, &gbuffer, &vertices, vertex_count, camera.view(), projection, ts)
+        })?;
+        let mut stats = BTreeMap::from([
+            ("triangles".to_owned(), prepared.triangle_count as i64),
+            ("degenerate_triangles".to_owned(), prepared.degenerate_triangles as i64),
+        ]);
+        let mut intermediates: Vec<(&str, &wgpu::Texture, wgpu::TextureAspect)> = Vec::new();
+        let shadow_map;
+        match method {
+            MethodConfig::Hard(params) => {
+                shadow_map = ShadowMapPass::create_map(device, params.map_size);
+                profiler.pass("shadow_map", |encoder, ts| {
+                    self.shadow_map.record(
+                        device, encoder, &shadow_map, frustum, params.bias.culling(), &vertices, vertex_count, ts,
+                    )
+                })?;
+                profiler.pass("visibility", |encoder, ts| {
+                    self.hard.record_visibility(
+                        device, encoder, params, &gbuffer, &shadow_map, frustum, scene.light.center, &visibility, ts,
+                    )
+                })?;
+                stats.insert("shadow_maps_rendered".into(), 1);
+                stats.insert("map_size".into(), params.map_size as i64);
+                intermediates.push(("shadow_map", &shadow_map, wgpu::TextureAspect::DepthOnly));
+            }
+        }
+        profiler.pass("shading", |encoder, ts| {
+            self.shading.record(
+                device, encoder, &gbuffer, &visibility, &radiance, scene, prepared, camera.eye, ts,
+            )
+        })?;
+        let (timings, mut encoder) = profiler.finish()?;
+
+        let readback_start = Instant::now();
+        let all = wgpu::TextureAspect::All;
+        let mut pending: Vec<PendingReadback> = vec![
+            readback::copy_texture(device, &mut encoder, &radiance, all),
+            readback::copy_texture(device, &mut encoder, &visibility, all),
+            readback::copy_texture(device, &mut encoder, &gbuffer.position, all),
+            readback::copy_texture(device, &mut encoder, &gbuffer.normal, all),
+        ];
+        if !options.intermediates {
+            intermediates.clear();
+        }
+        for (_, texture, aspect) in &intermediates {
+            pending.push(readback::copy_texture(device, &mut encoder, texture, *aspect));
+        }
+        self.ctx.queue.submit([encoder.finish()]);
+        let mut bytes = readback::map_all(&self.ctx, &pending)?.into_iter();
+        let mut next = || readback::cast_vec::<f32>(bytes.next().unwrap_or_default());
+        let (w, h) = (size.0 as usize, size.1 as usize);
+        let rgba = next();
+        let radiance: Vec<f32> = rgba.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]]).collect();
+        let visibility = next();
+        let position = next();
+        let normal = next();
+        let mut images = vec![
+            Image { name: "radiance".into(), shape: vec![h, w, 3], data: ImageData::F32(radiance) },
+            Image { name: "visibility".into(), shape: vec![h, w], data: ImageData::F32(visibility) },
+            Image {
+                name: "depth".into(),
+                shape: vec![h, w],
+                data: ImageData::F32(position.chunks_exact(4).map(|t| t[3]).collect()),
+            },
+            Image {
+                name: "position".into(),
+                shape: vec![h, w, 3],
+                data: ImageData::F32(position.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]]).collect()),
+            },
+            Image {
+                name: "normal".into(),
+                shape: vec![h, w, 3],
+                data: ImageData::F32(normal.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]]).collect()),
+            },
+        ];
+        let object_id: Vec<i32> = normal
+            .chunks_exact(4)
+            .map(|t| if t[3] < 0.0 { -1 } else { prepared.materials.get(t[3] as usize).map_or(-1, |m| m.1) })
+            .collect();
+        stats.insert("geometry_pixels".into(), object_id.iter().filter(|&&i| i >= 0).count() as i64);
+        images.push(Image { name: "object_id".into(), shape: vec![h, w], data: ImageData::I32(object_id) });
+        for (i, (name, texture, _)) in intermediates.iter().enumerate() {
+            let mut data = next();
+            if name.starts_with("shadow_map") {
+                // Stored as depth / far: hand back world-unit light depth.
+                data.iter_mut().for_each(|d| *d *= frustum.far);
+            }
+            let p = &pending[4 + i];
+            debug_assert_eq!((p.width(), p.height()), (texture.width(), texture.height()));
+            images.push(Image {
+                name: (*name).into(),
+                shape: vec![p.height() as usize, p.width() as usize],
+                data: ImageData::F32(data),
+            });
+        }
+        let mut timings = timings;
+        timings.passes.push(("readback".into(), readback_start.elapsed().as_secs_f64() * 1e3));
+        Ok(RenderResult {
+            method: method.name(),
+            params: method.effective_params(),
+            images,
+            timings,
+            total_ms: 0.0,
+            stats,
+        })
+    }
+}

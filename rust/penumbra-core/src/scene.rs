@@ -1,0 +1,511 @@
+//! The scene model of SPEC section 3 and its validation.
+//!
+//! Everything a user hands in is checked here, before it reaches the GPU: a
+//! malformed input is a typed [`Error`] naming the problem, never a panic or a
+//! NaN image. [`Scene::prepare`] returns the world-space geometry the passes use.
+
+use glam::{DMat4, DVec3, Mat4, Vec3};
+
+use crate::error::{Error, Result};
+
+/// A triangle mesh. Vertices are in object space; `transform` (affine) takes them
+/// to world space. Faces are counter-clockwise when seen from their front side.
+#[derive(Debug, Clone)]
+pub struct Mesh {
+    pub name: String,
+    pub vertices: Vec<[f32; 3]>,
+    pub faces: Vec<[u32; 3]>,
+    /// Optional per-vertex shading normals (object space); face normals otherwise.
+    pub normals: Option<Vec<[f32; 3]>>,
+    /// Diffuse reflectance, RGB in [0, 1].
+    pub albedo: [f32; 3],
+    /// Non-negative id written to the object-id image (-1 marks the background).
+    pub object_id: i32,
+    /// Object-to-world transform, column-major as glam stores it.
+    pub transform: Mat4,
+}
+
+/// A sphere light (SPEC section 3). `intensity` is the point-light-equivalent
+/// intensity I = L * pi * r^2 per RGB channel; storing I rather than the
+/// radiance L keeps the radius-0 limit (a point light) well defined.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SphereLight {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub intensity: [f32; 3],
+}
+
+impl SphereLight {
+    /// Radiance L = I / (pi r^2), or `None` for a point light (radius 0).
+    pub fn radiance(&self) -> Option<[f32; 3]> {
+        (self.radius > 0.0).then(|| {
+            let area = std::f32::consts::PI * self.radius * self.radius;
+            self.intensity.map(|i| i / area)
+        })
+    }
+}
+
+/// A pinhole camera: `look_at(eye, target, up)` with a vertical field of view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    pub up: [f32; 3],
+    pub fov_y_degrees: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Images larger than this many pixels are refused before any allocation.
+pub const MAX_PIXELS: u64 = 8192 * 8192;
+
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub meshes: Vec<Mesh>,
+    pub light: SphereLight,
+    /// Ambient term of the shading, `albedo * ambient` (SPEC section 3); 0 by default.
+    pub ambient: [f32; 3],
+}
+
+/// World-space geometry ready for upload: one entry per triangle corner.
+#[derive(Debug, Clone)]
+pub struct PreparedScene {
+    pub corners: Vec<CornerVertex>,
+    /// Per mesh: albedo and object id, indexed by `CornerVertex::mesh_index`.
+    pub materials: Vec<([f32; 3], i32)>,
+    pub bounds_min: Vec3,
+    pub bounds_max: Vec3,
+    pub triangle_count: usize,
+    /// Triangles whose area is zero to working precision; they draw nothing.
+    pub degenerate_triangles: usize,
+}
+
+/// One triangle corner as the G-buffer and shadow-map passes read it.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct CornerVertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub mesh_index: u32,
+}
+
+fn finite3(v: &[f32; 3]) -> bool {
+    v.iter().all(|c| c.is_finite())
+}
+
+fn dvec(v: [f32; 3]) -> DVec3 {
+    DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+}
+
+impl Mesh {
+    /// Checks the mesh on its own and returns its world-space vertices, face
+    /// normals (zero for zero-area faces) and optional world-space vertex normals.
+    #[allow(clippy::type_complexity)]
+    fn world_geometry(&self) -> Result<(Vec<DVec3>, Vec<DVec3>, Option<Vec<DVec3>>, usize)> {
+        let name = self.name.as_str();
+        if self.vertices.is_empty() {
+            return Err(Error::mesh(name, "has no vertices"));
+        }
+        if self.faces.is_empty() {
+            return Err(Error::mesh(name, "has no faces"));
+        }
+        if let Some(i) = self.vertices.iter().position(|v| !finite3(v)) {
+            return Err(Error::mesh(
+                name,
+                format!("vertex {i} has a NaN or infinite coordinate: {:?}", self.vertices[i]),
+            ));
+        }
+        let n = self.vertices.len();
+        if let Some((f, face)) = self
+            .faces
+            .iter()
+            .enumerate()
+            .find(|(_, face)| face.iter().any(|&i| i as usize >= n))
+        {
+            return Err(Error::mesh(
+                name,
+                format!("face {f} has index out of range {face:?}: the mesh has {n} vertices"),
+            ));
+        }
+        if !finite3(&self.albedo) || self.albedo.iter().any(|&a| !(0.0..=1.0).contains(&a)) {
+            return Err(Error::mesh(
+                name,
+                format!("albedo must be RGB in [0, 1], got {:?}", self.albedo),
+            ));
+        }
+        if self.object_id < 0 {
+            return Err(Error::mesh(
+                name,
+                format!("object_id must be >= 0 (-1 marks the background), got {}", self.object_id),
+            ));
+        }
+        let m = self.transform.to_cols_array();
+        if m.iter().any(|c| !c.is_finite()) {
+            return Err(Error::mesh(name, "transform has a NaN or infinite entry"));
+        }
+        let transform = self.transform.as_dmat4();
+        if transform.row(3) != glam::DVec4::new(0.0, 0.0, 0.0, 1.0) {
+            return Err(Error::mesh(
+                name,
+                "transform must be affine (last row 0 0 0 1); projective transforms are not supported",
+            ));
+        }
+        let det = transform.determinant();
+        if !det.is_normal() {
+            return Err(Error::mesh(name, format!("transform is singular (determinant {det})")));
+        }
+        let world: Vec<DVec3> = self
+            .vertices
+            .iter()
+            .map(|&v| transform.transform_point3(dvec(v)))
+            .collect();
+        if let Some(i) = world.iter().position(|v| !v.is_finite() || v.abs().max_element() > f32::MAX as f64) {
+            return Err(Error::mesh(
+                name,
+                format!("vertex {i} leaves the float32 range after the transform"),
+            ));
+        }
+        let normals = match &self.normals {
+            None => None,
+            Some(normals) => Some(world_normals(name, normals, n, &transform)?),
+        };
+        let mut degenerate = 0;
+        let face_normals: Vec<DVec3> = self
+            .faces
+            .iter()
+            .map(|f| {
+                let (a, b, c) = (world[f[0] as usize], world[f[1] as usize], world[f[2] as usize]);
+                let cross = (b - a).cross(c - a);
+                // A face is degenerate when its area is negligible against its edge lengths
+                // (collinear or repeated corners): its normal is undefined, and 0 is safe.
+                let scale = (b - a).length_squared().max((c - a).length_squared());
+                if cross.length_squared() <= 1e-24 * scale * scale || scale == 0.0 {
+                    degenerate += 1;
+                    DVec3::ZERO
+                } else {
+                    cross.normalize()
+                }
+            })
+            .collect();
+        if degenerate == self.faces.len() {
+            return Err(Error::mesh(
+                name,
+                format!("all {degenerate} faces are degenerate (zero area)"),
+            ));
+        }
+        Ok((world, face_normals, normals, degenerate))
+    }
+}
+
+fn world_normals(name: &str, normals: &[[f32; 3]], n: usize, transform: &DMat4) -> Result<Vec<DVec3>> {
+    if normals.len() != n {
+        return Err(Error::mesh(
+            name,
+            format!("has {} normals for {n} vertices", normals.len()),
+        ));
+    }
+    let normal_matrix = transform.inverse().transpose();
+    normals
+        .iter()
+        .enumerate()
+        .map(|(i, &nv)| {
+            let v = normal_matrix.transform_vector3(dvec(nv));
+            let len = v.length();
+            if !finite3(&nv) || !len.is_normal() {
+                Err(Error::mesh(name, format!("normal {i} is zero, NaN or infinite: {nv:?}")))
+            } else {
+                Ok(v / len)
+            }
+        })
+        .collect()
+}
+
+impl SphereLight {
+    pub fn validate(&self) -> Result<()> {
+        if !finite3(&self.center) {
+            return Err(Error::InvalidLight(format!(
+                "center must be finite, got {:?}",
+                self.center
+            )));
+        }
+        if !self.radius.is_finite() || self.radius < 0.0 {
+            return Err(Error::InvalidLight(format!(
+                "radius must be finite and >= 0, got {}",
+                self.radius
+            )));
+        }
+        if !finite3(&self.intensity) || self.intensity.iter().any(|&i| i < 0.0) {
+            return Err(Error::InvalidLight(format!(
+                "intensity must be finite and >= 0, got {:?}",
+                self.intensity
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Camera {
+    pub fn validate(&self) -> Result<()> {
+        for (what, v) in [("eye", self.eye), ("target", self.target), ("up", self.up)] {
+            if !finite3(&v) {
+                return Err(Error::InvalidCamera(format!("{what} must be finite, got {v:?}")));
+            }
+        }
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::InvalidCamera(format!(
+                "image size must be at least 1x1, got {}x{}",
+                self.width, self.height
+            )));
+        }
+        if self.width as u64 * self.height as u64 > MAX_PIXELS {
+            return Err(Error::InvalidCamera(format!(
+                "image of {}x{} exceeds the limit of {MAX_PIXELS} pixels",
+                self.width, self.height
+            )));
+        }
+        if !(self.fov_y_degrees > 0.0 && self.fov_y_degrees < 180.0) {
+            return Err(Error::InvalidCamera(format!(
+                "fov_y must be in (0, 180) degrees, got {}",
+                self.fov_y_degrees
+            )));
+        }
+        let forward = dvec(self.target) - dvec(self.eye);
+        if forward.length_squared() == 0.0 {
+            return Err(Error::InvalidCamera("eye and target coincide".into()));
+        }
+        let up = dvec(self.up);
+        if up.length_squared() == 0.0 {
+            return Err(Error::InvalidCamera("up vector is zero".into()));
+        }
+        let sin = forward.normalize().cross(up.normalize()).length();
+        if sin < 1e-6 {
+            return Err(Error::InvalidCamera(
+                "up vector is parallel to the viewing direction".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// World-to-view (right-handed, looking down -z).
+    pub fn view(&self) -> Mat4 {
+        glam::camera::rh::view::look_at_mat4(self.eye.into(), self.target.into(), self.up.into())
+    }
+
+    /// View-to-clip for wgpu's [0, 1] depth range, with near and far planes fitted
+    /// to an axis-aligned box so depth precision is spent on the scene.
+    pub fn projection(&self, bounds_min: Vec3, bounds_max: Vec3) -> (Mat4, f32, f32) {
+        let view = self.view();
+        let mut z_min = f32::INFINITY;
+        let mut z_max = 0.0f32;
+        for i in 0..8 {
+            let corner = Vec3::new(
+                if i & 1 == 0 { bounds_min.x } else { bounds_max.x },
+                if i & 2 == 0 { bounds_min.y } else { bounds_max.y },
+                if i & 4 == 0 { bounds_min.z } else { bounds_max.z },
+            );
+            let depth = -view.transform_point3(corner).z;
+            z_min = z_min.min(depth);
+            z_max = z_max.max(depth);
+        }
+        // The scene is wholly behind the camera when z_max <= 0: any positive far works.
+        let far = (z_max * 1.01).max(1e-3);
+        let near = (z_min * 0.99).max(far * 1e-5);
+        let aspect = self.width as f32 / self.height as f32;
+        (
+            // WebGPU shares Direct3D's clip conventions: y up, depth in [0, 1].
+            glam::camera::rh::proj::directx::perspective(self.fov_y_degrees.to_radians(), aspect, near, far),
+            near,
+            far,
+        )
+    }
+}
+
+impl Scene {
+    /// Validates the whole scene and builds its world-space geometry.
+    pub fn prepare(&self) -> Result<PreparedScene> {
+        if self.meshes.is_empty() {
+            return Err(Error::InvalidScene("has no meshes".into()));
+        }
+        self.light.validate()?;
+        if !finite3(&self.ambient) || self.ambient.iter().any(|&a| a < 0.0) {
+            return Err(Error::InvalidScene(format!(
+                "ambient must be finite and >= 0, got {:?}",
+                self.ambient
+            )));
+        }
+        let light_center = dvec(self.light.center);
+        let light_radius = self.light.radius as f64;
+        let mut corners = Vec::new();
+        let mut materials = Vec::with_capacity(self.meshes.len());
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut degenerate_triangles = 0;
+        for (mesh_index, mesh) in self.meshes.iter().enumerate() {
+            let (world, face_normals, vertex_normals, degenerate) = mesh.world_geometry()?;
+            degenerate_triangles += degenerate;
+            for v in &world {
+                lo = lo.min(*v);
+                hi = hi.max(*v);
+            }
+            for (f, face) in mesh.faces.iter().enumerate() {
+                let tri = face.map(|i| world[i as usize]);
+                let distance = (closest_point_on_triangle(light_center, tri) - light_center).length();
+                // A light touching geometry has no defined irradiance there; a point light
+                // must lie strictly off every surface (relative tolerance of float32).
+                let tolerance = 1e-6 * (light_center.abs().max_element() + 1.0);
+                if distance <= light_radius + tolerance {
+                    return Err(Error::InvalidScene(format!(
+                        "the light (center {:?}, radius {}) intersects mesh '{}' at face {f}",
+                        self.light.center, self.light.radius, mesh.name
+                    )));
+                }
+                for (corner, &vi) in face.iter().enumerate() {
+                    let normal = match &vertex_normals {
+                        Some(normals) => normals[vi as usize],
+                        None => face_normals[f],
+                    };
+                    corners.push(CornerVertex {
+                        position: tri[corner].as_vec3().into(),
+                        normal: normal.as_vec3().into(),
+                        mesh_index: mesh_index as u32,
+                    });
+                }
+            }
+            materials.push((mesh.albedo, mesh.object_id));
+        }
+        Ok(PreparedScene {
+            triangle_count: corners.len() / 3,
+            corners,
+            materials,
+            bounds_min: lo.as_vec3(),
+            bounds_max: hi.as_vec3(),
+            degenerate_triangles,
+        })
+    }
+}
+
+/// Closest point to `p` on triangle `t` (Ericson, Real-Time Collision Detection 5.1.5).
+/// Works for degenerate triangles too: every division is guarded by its region test.
+pub fn closest_point_on_triangle(p: DVec3, t: [DVec3; 3]) -> DVec3 {
+    let [a, b, c] = t;
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        // d1 - d3 = |ab|^2 > 0 here because d1 >= 0 >= d3 and not both zero.
+        let denom = d1 - d3;
+        return if denom > 0.0 { a + ab * (d1 / denom) } else { a };
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let denom = d2 - d6;
+        return if denom > 0.0 { a + ac * (d2 / denom) } else { a };
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let denom = (d4 - d3) + (d5 - d6);
+        return if denom > 0.0 { b + (c - b) * ((d4 - d3) / denom) } else { b };
+    }
+    let sum = va + vb + vc;
+    if sum <= 0.0 {
+        // Degenerate triangle whose regions all failed: fall back to the nearest corner.
+        return *[a, b, c]
+            .iter()
+            .min_by(|x, y| (p - **x).length_squared().total_cmp(&(p - **y).length_squared()))
+            .unwrap_or(&a);
+    }
+    let v = vb / sum;
+    let w = vc / sum;
+    a + ab * v + ac * w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> Mesh {
+        Mesh {
+            name: "quad".into(),
+            vertices: vec![[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [-1.0, 0.0, 1.0]],
+            faces: vec![[0, 2, 1], [0, 3, 2]],
+            normals: None,
+            albedo: [0.5; 3],
+            object_id: 0,
+            transform: Mat4::IDENTITY,
+        }
+    }
+
+    fn scene(mesh: Mesh) -> Scene {
+        Scene {
+            meshes: vec![mesh],
+            light: SphereLight { center: [0.0, 2.0, 0.0], radius: 0.5, intensity: [1.0; 3] },
+            ambient: [0.0; 3],
+        }
+    }
+
+    #[test]
+    fn quad_faces_point_up() {
+        let prepared = scene(quad()).prepare().unwrap();
+        assert_eq!(prepared.triangle_count, 2);
+        for c in &prepared.corners {
+            assert_eq!(c.normal, [0.0, 1.0, 0.0]);
+        }
+    }
+
+    #[test]
+    fn bad_meshes_are_named() {
+        let mut m = quad();
+        m.vertices[2][1] = f32::NAN;
+        let err = scene(m).prepare().unwrap_err();
+        assert!(matches!(&err, Error::InvalidMesh { mesh, message } if mesh == "quad" && message.contains("vertex 2")), "{err}");
+        let mut m = quad();
+        m.faces[1][2] = 9;
+        assert!(scene(m).prepare().unwrap_err().to_string().contains("out of range"));
+        let mut m = quad();
+        m.faces = vec![[0, 1, 1]];
+        assert!(scene(m).prepare().unwrap_err().to_string().contains("degenerate"));
+        let mut m = quad();
+        m.transform = Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0));
+        assert!(scene(m).prepare().unwrap_err().to_string().contains("singular"));
+    }
+
+    #[test]
+    fn light_touching_geometry_is_refused() {
+        let mut s = scene(quad());
+        s.light.center = [0.3, 0.4, 0.2];
+        assert!(matches!(s.prepare(), Err(Error::InvalidScene(_))));
+        s.light.center = [3.0, 0.0, 0.0];
+        s.light.radius = 0.0;
+        assert!(s.prepare().is_ok(), "a point light beside the quad's plane is fine");
+        s.light.center = [0.5, 0.0, 0.5];
+        assert!(matches!(s.prepare(), Err(Error::InvalidScene(_))), "a point light on the quad");
+    }
+
+    #[test]
+    fn closest_point_handles_degenerate_triangles() {
+        let p = DVec3::new(0.0, 1.0, 0.0);
+        let a = DVec3::new(1.0, 0.0, 0.0);
+        let q = closest_point_on_triangle(p, [a, a, a]);
+        assert_eq!(q, a);
+        let q = closest_point_on_triangle(p, [a, DVec3::new(-1.0, 0.0, 0.0), DVec3::ZERO]);
+        assert!(q.is_finite() && (q - DVec3::ZERO).length() < 1e-12, "{q}");
+    }
+}

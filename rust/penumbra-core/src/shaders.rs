@@ -1,0 +1,49 @@
+//! WGSL sources. Each pass or method keeps its shader beside its module; shared
+//! snippets live in `shaders/` and are prepended here. [`all`] lists every
+//! composed shader so that `tests/shader_validation.rs` checks each with naga.
+
+pub const COMMON: &str = include_str!("shaders/common.wgsl");
+pub const LIGHT_SPACE: &str = include_str!("shaders/light_space.wgsl");
+
+/// Concatenates snippets into one module source.
+pub fn compose(parts: &[&str]) -> String {
+    parts.join("\n")
+}
+
+pub fn gbuffer() -> String {
+    compose(&[include_str!("passes/gbuffer.wgsl")])
+}
+
+pub fn shadow_map() -> String {
+    compose(&[include_str!("passes/shadow_map.wgsl")])
+}
+
+pub fn shading() -> String {
+    compose(&[COMMON, include_str!("passes/shading.wgsl")])
+}
+
+pub fn hard() -> String {
+    compose(&[COMMON, LIGHT_SPACE, include_str!("methods/hard.wgsl")])
+}
+
+/// Every composed shader with the files it is made of (relative to `src/`).
+pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
+    vec![
+        ("gbuffer", gbuffer(), &["passes/gbuffer.wgsl"]),
+        ("shadow_map", shadow_map(), &["passes/shadow_map.wgsl"]),
+        ("shading", shading(), &["shaders/common.wgsl", "passes/shading.wgsl"]),
+        (
+            "hard",
+            hard(),
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "methods/hard.wgsl"],
+        ),
+    ]
+}
+
+/// Creates a shader module from a composed source.
+pub fn module(device: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    })
+}
