@@ -1,0 +1,48 @@
+"""Penumbra: a headless soft-shadow render service.
+
+Build a :class:`Scene` from numpy arrays or trimesh meshes (or take one from
+:mod:`penumbra.scenes`), render it with a :class:`Renderer` and a method
+name, and get linear float32 numpy arrays, per-pass timings and statistics back.
+"""
+
+from penumbra import errors, scenes
+from penumbra._core import __version__
+from penumbra.errors import (
+    CameraError,
+    GpuError,
+    GpuUnavailableError,
+    InvalidInputError,
+    LightError,
+    MeshError,
+    ParameterError,
+    PenumbraError,
+    PenumbraIOError,
+    SceneError,
+)
+from penumbra.render import Renderer, RenderResult, adapter_info, methods, write_image
+from penumbra.scene import Camera, Mesh, Scene, SphereLight
+
+__all__ = [
+    "__version__",
+    "errors",
+    "scenes",
+    "Renderer",
+    "RenderResult",
+    "adapter_info",
+    "methods",
+    "write_image",
+    "Camera",
+    "Mesh",
+    "Scene",
+    "SphereLight",
+    "PenumbraError",
+    "InvalidInputError",
+    "MeshError",
+    "LightError",
+    "CameraError",
+    "SceneError",
+    "ParameterError",
+    "GpuUnavailableError",
+    "GpuError",
+    "PenumbraIOError",
+]

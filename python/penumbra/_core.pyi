@@ -1,0 +1,49 @@
+"""Type stubs of the compiled core (``rust/penumbra-py``). Use the wrappers in
+:mod:`penumbra`; this module is their implementation.
+
+Every function here raises the classes of :mod:`penumbra.errors`:
+``MeshError``, ``LightError``, ``CameraError``, ``SceneError`` and
+``ParameterError`` (all ``InvalidInputError``, hence ``ValueError``) for bad
+input; ``GpuUnavailableError`` when no adapter exists; ``GpuError`` when the
+GPU fails; ``PenumbraIOError`` when a file cannot be written.
+"""
+
+from os import PathLike
+from typing import Any, final
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+def adapter_info() -> dict[str, Any]: ...
+def methods() -> list[tuple[str, bool]]: ...
+def write_image(path: str | PathLike[str], image: npt.NDArray[np.float32]) -> None: ...
+@final
+class Renderer:
+    def __new__(cls, timing: str = "auto") -> Renderer: ...
+    def adapter_info(self) -> dict[str, Any]: ...
+    @property
+    def timing_source(self) -> str: ...
+    def render(
+        self,
+        meshes: list[
+            tuple[
+                str,
+                npt.NDArray[np.float32],
+                npt.NDArray[np.uint32],
+                npt.NDArray[np.float32] | None,
+                npt.NDArray[np.float32],
+                int,
+                npt.NDArray[np.float32],
+            ]
+        ],
+        light: tuple[npt.NDArray[np.float32], float, npt.NDArray[np.float32]],
+        camera: tuple[
+            npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32], float, int, int
+        ],
+        ambient: npt.NDArray[np.float32],
+        method: str,
+        params: dict[str, Any],
+        intermediates: bool = False,
+    ) -> dict[str, Any]: ...

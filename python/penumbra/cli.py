@@ -1,0 +1,86 @@
+"""The command line: ``penumbra render | scenes | info``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any, Sequence
+
+from penumbra import scenes
+from penumbra.errors import ParameterError, PenumbraError
+from penumbra.render import Renderer, adapter_info, methods
+
+
+def _param(text: str) -> tuple[str, Any]:
+    """``key=value`` with value parsed as int, float, bool or string."""
+    if "=" not in text:
+        raise ParameterError(f"--param takes key=value, got {text!r}")
+    key, raw = text.split("=", 1)
+    value: Any = raw
+    if raw.lower() in ("true", "false"):
+        value = raw.lower() == "true"
+    else:
+        for cast in (int, float):
+            try:
+                value = cast(raw)
+                break
+            except ValueError:
+                pass
+    return key.strip(), value
+
+
+def _render(args: argparse.Namespace) -> int:
+    if args.mesh:
+        scene = scenes.from_mesh(args.mesh, width=args.width or 512, height=args.height or 512)
+    else:
+        scene = scenes.get(args.scene, width=args.width, height=args.height)
+    if args.light_radius is not None:
+        scene = scene.with_light(scene.light.with_radius(args.light_radius))
+    params = dict(_param(p) for p in args.param)
+    renderer = Renderer()
+    result = renderer.render(scene, args.method, **params)
+    result.save(args.output, image=args.image)
+    print(f"scene {scene.name}: method {result.method} {json.dumps(result.params)}")
+    print(f"adapter: {renderer.adapter_info['name']} ({renderer.adapter_info['backend']})")
+    passes = ", ".join(f"{k} {v:.2f}" for k, v in result.timings.items())
+    print(f"timings ({result.timing_source}, ms): {passes}; total {result.total_ms:.1f}")
+    print(f"stats: {json.dumps(result.stats)}")
+    print(f"wrote {args.image} to {args.output}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="penumbra", description="Headless soft-shadow renderer.")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    render = sub.add_parser("render", help="render a built-in scene or a mesh file")
+    source = render.add_mutually_exclusive_group()
+    source.add_argument("--scene", default=scenes.DEFAULT, help=f"built-in scene (default {scenes.DEFAULT}; see `penumbra scenes`)")
+    source.add_argument("--mesh", help="a mesh file trimesh can read, placed on the ground plane")
+    render.add_argument("--method", default="hard", help="shadow method (default hard)")
+    render.add_argument("--width", type=int, help="image width in pixels")
+    render.add_argument("--height", type=int, help="image height in pixels")
+    render.add_argument("--light-radius", type=float, help="override the light's radius")
+    render.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="method parameter, repeatable")
+    render.add_argument("--image", default="radiance", help="which image to write (radiance, visibility, depth, ...)")
+    render.add_argument("-o", "--output", default="penumbra.png", help="output file: .png (sRGB), .exr or .npy (linear)")
+    render.set_defaults(run=_render)
+
+    sub.add_parser("scenes", help="list the built-in scenes").set_defaults(run=lambda a: print("\n".join(scenes.names())) or 0)
+    sub.add_parser("methods", help="list the implemented methods").set_defaults(run=lambda a: print("\n".join(methods())) or 0)
+    sub.add_parser("info", help="show the GPU adapter in use").set_defaults(run=lambda a: print(json.dumps(adapter_info(), indent=2)) or 0)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.run(args))
+    except PenumbraError as e:
+        print(f"penumbra: error: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

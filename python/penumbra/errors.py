@@ -1,0 +1,64 @@
+"""The exception hierarchy. Every error Penumbra raises is a :class:`PenumbraError`;
+errors in what the caller passed in are also :class:`ValueError` (through
+:class:`InvalidInputError`), so ``except ValueError`` catches them too.
+
+The compiled core raises these same classes (``penumbra._core`` imports them).
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "PenumbraError",
+    "InvalidInputError",
+    "MeshError",
+    "LightError",
+    "CameraError",
+    "SceneError",
+    "ParameterError",
+    "GpuUnavailableError",
+    "GpuError",
+    "PenumbraIOError",
+]
+
+
+class PenumbraError(Exception):
+    """Base class of every Penumbra error."""
+
+
+class InvalidInputError(PenumbraError, ValueError):
+    """Something the caller passed in is malformed; the message names it."""
+
+
+class MeshError(InvalidInputError):
+    """A mesh is malformed: wrong dtype or shape, NaN/Inf, indices out of range,
+    empty or degenerate, or a mesh file that cannot be read."""
+
+
+class LightError(InvalidInputError):
+    """The light is malformed (negative or non-finite radius, bad radiance)."""
+
+
+class CameraError(InvalidInputError):
+    """The camera is malformed (zero-size or huge image, degenerate look-at, bad fov)."""
+
+
+class SceneError(InvalidInputError):
+    """The scene as a whole cannot be rendered (no meshes, light touching or
+    surrounded by geometry)."""
+
+
+class ParameterError(InvalidInputError):
+    """Unknown method or parameter, wrong type, or value out of range."""
+
+
+class GpuUnavailableError(PenumbraError, RuntimeError):
+    """No GPU adapter (hardware or software) could be found or opened. The
+    message names the driver package to install."""
+
+
+class GpuError(PenumbraError, RuntimeError):
+    """The GPU failed while rendering (out of memory, device lost, validation)."""
+
+
+class PenumbraIOError(PenumbraError, OSError):
+    """Writing an output file failed."""

@@ -1,0 +1,127 @@
+"""Built-in scenes, generated in code: ``names()`` lists them, ``get(name)``
+builds one with its camera and light.
+
+Each is a caster (or several) over a 10 x 10 ground plane at y = 0, lit by a
+sphere light above, seen by a camera from the front and above:
+
+- ``sphere_on_plane``: a sphere floating over the plane (the default scene).
+- ``cube_on_plane``: a rotated cube floating over the plane.
+- ``overlapping_casters``: a sphere high up and a box lower down whose shadows
+  overlap in light space (PVM's overlap artifact, Cournia 4.3).
+- ``resting_box``: a tall box standing on the plane: the penumbra shrinks to
+  zero width where it touches (contact hardening).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import numpy as np
+import trimesh
+
+from penumbra.errors import MeshError, ParameterError
+from penumbra.scene import Camera, Mesh, Scene, SphereLight
+
+__all__ = ["names", "get", "DEFAULT", "ground_plane", "sphere", "box", "from_mesh"]
+
+DEFAULT = "sphere_on_plane"
+_WIDTH, _HEIGHT = 512, 512
+
+
+def ground_plane(half_size: float = 5.0, albedo: float = 0.8, object_id: int = 0) -> Mesh:
+    """A square at y = 0 facing up (+y), made of two triangles."""
+    h = half_size
+    vertices = np.array([[-h, 0, -h], [h, 0, -h], [h, 0, h], [-h, 0, h]], dtype=np.float32)
+    faces = np.array([[0, 2, 1], [0, 3, 2]], dtype=np.uint32)
+    return Mesh(vertices, faces, albedo=albedo, object_id=object_id, name="ground")
+
+
+def sphere(center: tuple[float, float, float], radius: float, *, subdivisions: int = 4, albedo: float = 0.7, object_id: int = 1, name: str = "sphere") -> Mesh:
+    """An icosphere (counter-clockwise outward faces)."""
+    m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
+    return Mesh(m.vertices + np.asarray(center), m.faces, albedo=albedo, object_id=object_id, name=name)
+
+
+def box(center: tuple[float, float, float], extents: tuple[float, float, float], *, yaw_degrees: float = 0.0, albedo: float = 0.7, object_id: int = 1, name: str = "box") -> Mesh:
+    """An axis-aligned box of full ``extents``, turned by ``yaw_degrees`` about y."""
+    m = trimesh.creation.box(extents=extents)
+    transform = trimesh.transformations.rotation_matrix(math.radians(yaw_degrees), [0, 1, 0])
+    transform[:3, 3] = center
+    return Mesh(m.vertices, m.faces, albedo=albedo, object_id=object_id, transform=transform, name=name)
+
+
+def _camera() -> Camera:
+    return Camera(eye=(0.0, 5.0, 9.0), target=(0.0, 0.8, 0.0), fov_y=40.0, width=_WIDTH, height=_HEIGHT)
+
+
+def _light(radius: float) -> SphereLight:
+    # Intensity gives a lit-plane radiance of about 0.5 under the light.
+    return SphereLight(center=(1.5, 6.0, 1.0), radius=radius, intensity=80.0)
+
+
+def _sphere_on_plane() -> Scene:
+    return Scene([ground_plane(), sphere((0.0, 1.6, 0.0), 1.0)], _light(0.5), _camera(), name="sphere_on_plane")
+
+
+def _cube_on_plane() -> Scene:
+    return Scene([ground_plane(), box((0.0, 1.6, 0.0), (1.5, 1.5, 1.5), yaw_degrees=30.0)], _light(0.5), _camera(), name="cube_on_plane")
+
+
+def _overlapping_casters() -> Scene:
+    casters = [
+        sphere((0.6, 3.2, 0.4), 0.6, object_id=1, name="high_sphere"),
+        box((-0.4, 1.2, -0.2), (1.4, 0.4, 1.4), yaw_degrees=15.0, object_id=2, name="low_box"),
+    ]
+    return Scene([ground_plane(), *casters], _light(0.5), _camera(), name="overlapping_casters")
+
+
+def _resting_box() -> Scene:
+    return Scene([ground_plane(), box((0.0, 1.0, 0.0), (0.8, 2.0, 0.8), yaw_degrees=20.0)], _light(0.8), _camera(), name="resting_box")
+
+
+_SCENES: dict[str, Callable[[], Scene]] = {
+    "sphere_on_plane": _sphere_on_plane,
+    "cube_on_plane": _cube_on_plane,
+    "overlapping_casters": _overlapping_casters,
+    "resting_box": _resting_box,
+}
+
+
+def names() -> list[str]:
+    """Names of the built-in scenes, the default first."""
+    return list(_SCENES)
+
+
+def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = None, light_radius: float | None = None) -> Scene:
+    """Builds the built-in scene ``name``, optionally at another image size or light radius."""
+    if name not in _SCENES:
+        raise ParameterError(f"unknown scene {name!r}; built-in scenes: {names()}")
+    scene = _SCENES[name]()
+    assert scene.camera is not None
+    if width is not None or height is not None:
+        scene = scene.with_camera(scene.camera.with_size(width or scene.camera.width, height or scene.camera.height))
+    if light_radius is not None:
+        scene = scene.with_light(scene.light.with_radius(light_radius))
+    return scene
+
+
+def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5) -> Scene:
+    """A scene around a mesh file (anything trimesh reads): the mesh scaled to
+    a 2.5-unit bounding box, resting on the ground plane, with the default light and camera."""
+    try:
+        loaded = trimesh.load(path, force="mesh")
+    except Exception as e:  # trimesh raises many types for unreadable files
+        raise MeshError(f"cannot read mesh file {path!r}: {e}") from None
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise MeshError(f"mesh file {path!r} holds no triangles")
+    extent = float(np.max(loaded.extents))
+    if not math.isfinite(extent) or extent <= 0:
+        raise MeshError(f"mesh file {path!r} has a degenerate or non-finite bounding box")
+    scale = 2.5 / extent
+    vertices = (np.asarray(loaded.vertices) - loaded.bounds.mean(axis=0)) * scale
+    vertices[:, 1] -= vertices[:, 1].min() - 1e-3
+    name = str(path).rsplit("/", 1)[-1]
+    mesh = Mesh(vertices, np.asarray(loaded.faces), albedo=0.7, object_id=1, name=name)
+    camera = _camera().with_size(width, height)
+    return Scene([ground_plane(), mesh], _light(light_radius), camera, name=name)
