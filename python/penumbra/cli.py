@@ -32,7 +32,8 @@ def _param(text: str) -> tuple[str, Any]:
 
 def _render(args: argparse.Namespace) -> int:
     if args.mesh:
-        scene = scenes.from_mesh(args.mesh, width=args.width or 512, height=args.height or 512)
+        size = {k: v for k, v in (('width', args.width), ('height', args.height)) if v is not None}
+        scene = scenes.from_mesh(args.mesh, **size)
     else:
         scene = scenes.get(args.scene, width=args.width, height=args.height)
     if args.light_radius is not None:

@@ -201,6 +201,8 @@ class Camera:
     def __post_init__(self) -> None:
         for what in ("eye", "target", "up"):
             array = _float_array(getattr(self, what), (3,), f"camera {what}", CameraError)
+            if not np.isfinite(array).all():
+                raise CameraError(f"camera: {what} must be finite, got {array.tolist()}")
             object.__setattr__(self, what, tuple(float(x) for x in array))
         object.__setattr__(self, "fov_y", _real(self.fov_y, "camera fov_y", CameraError))
         object.__setattr__(self, "width", _size(self.width, "camera width"))

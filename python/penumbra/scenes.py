@@ -100,7 +100,12 @@ def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = N
     scene = _SCENES[name]()
     assert scene.camera is not None
     if width is not None or height is not None:
-        scene = scene.with_camera(scene.camera.with_size(width or scene.camera.width, height or scene.camera.height))
+        scene = scene.with_camera(
+            scene.camera.with_size(
+                scene.camera.width if width is None else width,
+                scene.camera.height if height is None else height,
+            )
+        )
     if light_radius is not None:
         scene = scene.with_light(scene.light.with_radius(light_radius))
     return scene

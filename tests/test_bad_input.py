@@ -1,0 +1,143 @@
+"""Every bad input gets its typed exception with a message naming the problem
+(issue 2; SPEC and DEVELOPERS.md's list). None crashes the interpreter."""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra import CameraError, LightError, MeshError, ParameterError, SceneError
+from penumbra.scenes import ground_plane, sphere
+
+QUAD_V = np.array([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], dtype=np.float32)
+QUAD_F = np.array([[0, 2, 1], [0, 3, 2]])
+CAMERA = penumbra.Camera(eye=(0, 4, 6), target=(0, 0, 0), width=32, height=32)
+LIGHT = penumbra.SphereLight((0.3, 3, 0.2), 0.3, intensity=10)
+
+
+def quad(**kwargs: Any) -> penumbra.Mesh:
+    args: dict[str, Any] = dict(vertices=QUAD_V, faces=QUAD_F, name="quad")
+    args.update(kwargs)
+    return penumbra.Mesh(args.pop("vertices"), args.pop("faces"), **args)
+
+
+def render(meshes: Any = None, light: Any = None, camera: Any = None, method: str = "hard", **params: Any) -> Callable[[penumbra.Renderer], Any]:
+    def run(renderer: penumbra.Renderer) -> Any:
+        scene = penumbra.Scene(meshes if meshes is not None else [quad()], light or LIGHT, camera or CAMERA)
+        return renderer.render(scene, method, **params)
+
+    return run
+
+
+def with_nan() -> np.ndarray:
+    v = QUAD_V.copy()
+    v[2, 1] = np.nan
+    return v
+
+
+def with_inf() -> np.ndarray:
+    v = QUAD_V.copy()
+    v[1, 0] = np.inf
+    return v
+
+
+# (id, action, exception, words the message must contain)
+CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
+    # Meshes
+    ("nan_vertex", render([quad(vertices=with_nan())]), MeshError, ["quad", "vertex 2", "NaN"]),
+    ("inf_vertex", render([quad(vertices=with_inf())]), MeshError, ["vertex 1", "infinite"]),
+    ("overflow_to_inf", render([quad(vertices=QUAD_V.astype(np.float64) * 1e39)]), MeshError, ["infinite"]),
+    ("vertices_shape", lambda r: quad(vertices=QUAD_V[:, :2]), MeshError, ["vertices", "shape (N, 3)", "(4, 2)"]),
+    ("vertices_dtype", lambda r: quad(vertices=[["a", "b", "c"]] * 4), MeshError, ["vertices", "numeric"]),
+    ("vertices_complex", lambda r: quad(vertices=QUAD_V.astype(complex)), MeshError, ["vertices", "real"]),
+    ("faces_float", lambda r: quad(faces=QUAD_F.astype(float)), MeshError, ["faces", "integers"]),
+    ("faces_shape", lambda r: quad(faces=[[0, 1, 2, 3]]), MeshError, ["faces", "(M, 3)"]),
+    ("face_out_of_range", render([quad(faces=[[0, 1, 7]])]), MeshError, ["face 0", "out of range", "4 vertices"]),
+    ("face_negative", lambda r: quad(faces=[[0, -1, 2]]), MeshError, ["negative index"]),
+    ("empty_mesh", render([quad(vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), int))]), MeshError, ["no vertices"]),
+    ("no_faces", render([quad(faces=np.zeros((0, 3), int))]), MeshError, ["no faces"]),
+    ("all_degenerate", render([quad(faces=[[0, 1, 1], [2, 2, 2]])]), MeshError, ["degenerate"]),
+    ("collinear_face", render([quad(vertices=[[0, 0, 0], [1, 0, 0], [2, 0, 0]], faces=[[0, 1, 2]])]), MeshError, ["degenerate"]),
+    ("albedo_range", render([quad(albedo=1.5)]), MeshError, ["albedo", "[0, 1]"]),
+    ("albedo_nan", render([quad(albedo=(0.5, np.nan, 0.5))]), MeshError, ["albedo"]),
+    ("albedo_shape", lambda r: quad(albedo=(0.5, 0.5)), MeshError, ["albedo", "shape (3)"]),
+    ("object_id_negative", render([quad(object_id=-1)]), MeshError, ["object_id", ">= 0"]),
+    ("object_id_type", lambda r: quad(object_id=1.5), MeshError, ["object_id", "integer"]),
+    ("transform_singular", render([quad(transform=np.diag([1, 0, 1, 1]))]), MeshError, ["singular"]),
+    ("transform_projective", render([quad(transform=[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0.5, 1]])]), MeshError, ["affine"]),
+    ("transform_nan", render([quad(transform=np.full((4, 4), np.nan))]), MeshError, ["transform", "NaN"]),
+    ("transform_shape", lambda r: quad(transform=np.eye(3)), MeshError, ["transform", "(4, 4)"]),
+    ("normals_count", render([quad(normals=np.ones((3, 3)))]), MeshError, ["3 normals for 4 vertices"]),
+    ("normals_zero", render([quad(normals=np.zeros((4, 3)))]), MeshError, ["normal 0", "zero"]),
+    ("trimesh_scene", lambda r: penumbra.Mesh.from_trimesh(__import__("trimesh").Scene()), MeshError, ["trimesh.Scene"]),
+    ("unreadable_mesh_file", lambda r: penumbra.scenes.from_mesh(__file__), MeshError, ["cannot read mesh file"]),
+    # Lights
+    ("negative_radius", lambda r: penumbra.SphereLight((0, 3, 0), -0.5, intensity=1), LightError, ["radius", ">= 0"]),
+    ("nan_radius", lambda r: penumbra.SphereLight((0, 3, 0), float("nan"), intensity=1), LightError, ["radius"]),
+    ("radius_type", lambda r: penumbra.SphereLight((0, 3, 0), "big", intensity=1), LightError, ["radius", "real number"]),
+    ("light_center_nan", render(light=penumbra.SphereLight((0, np.nan, 0), 0.3, intensity=1)), LightError, ["center", "finite"]),
+    ("negative_intensity", render(light=penumbra.SphereLight((0, 3, 0), 0.3, intensity=-1)), LightError, ["intensity", ">= 0"]),
+    ("radiance_of_point_light", lambda r: penumbra.SphereLight((0, 3, 0), 0.0, radiance=1), LightError, ["radius-0", "intensity"]),
+    ("radiance_and_intensity", lambda r: penumbra.SphereLight((0, 3, 0), 1.0, radiance=1, intensity=1), LightError, ["exactly one"]),
+    ("light_intersects_mesh", render(light=penumbra.SphereLight((0, 0.2, 0), 0.3, intensity=1)), SceneError, ["intersects mesh 'quad'"]),
+    ("point_light_on_surface", render(light=penumbra.SphereLight((0.5, 0, 0.5), 0.0, intensity=1)), SceneError, ["intersects"]),
+    ("geometry_surrounds_light", render([ground_plane(), sphere((0, 1, 0), 0.5)], light=penumbra.SphereLight((0, 0.3, 0), 0.1, intensity=1)), SceneError, ["surrounds the light"]),
+    # Cameras and images
+    ("zero_width", render(camera=CAMERA.with_size(0, 32)), CameraError, ["at least 1x1", "0x32"]),
+    ("zero_height", render(camera=CAMERA.with_size(32, 0)), CameraError, ["0"]),
+    ("negative_width", lambda r: CAMERA.with_size(-5, 32), CameraError, ["width"]),
+    ("width_type", lambda r: CAMERA.with_size(32.5, 32), CameraError, ["width", "integer"]),
+    ("huge_image", render(camera=CAMERA.with_size(100_000, 100_000)), CameraError, ["exceeds"]),
+    ("fov_zero", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=0, width=8, height=8)), CameraError, ["fov_y"]),
+    ("fov_180", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=180, width=8, height=8)), CameraError, ["fov_y"]),
+    ("eye_is_target", render(camera=penumbra.Camera((0, 4, 6), (0, 4, 6), width=8, height=8)), CameraError, ["coincide"]),
+    ("up_parallel", render(camera=penumbra.Camera((0, 4, 0), (0, 0, 0), up=(0, 1, 0), width=8, height=8)), CameraError, ["parallel"]),
+    ("eye_nan", lambda r: penumbra.Camera((0, np.nan, 6), (0, 0, 0)), CameraError, ["eye", "finite"]),
+    ("no_camera", lambda r: r.render(penumbra.Scene([quad()], LIGHT)), CameraError, ["no camera"]),
+    # Scenes
+    ("no_meshes", render([]), SceneError, ["no meshes"]),
+    ("not_a_mesh", lambda r: penumbra.Scene([QUAD_V], LIGHT, CAMERA), SceneError, ["meshes[0]", "penumbra.Mesh"]),
+    ("not_a_light", lambda r: penumbra.Scene([quad()], (0, 3, 0), CAMERA), SceneError, ["light"]),
+    ("negative_ambient", lambda r: r.render(penumbra.Scene([quad()], LIGHT, CAMERA, ambient=-1.0)), SceneError, ["ambient"]),
+    ("not_a_scene", lambda r: r.render("sphere_on_plane"), SceneError, ["penumbra.Scene"]),
+    ("unknown_scene", lambda r: penumbra.scenes.get("teapot"), ParameterError, ["unknown scene", "sphere_on_plane"]),
+    # Methods and parameters
+    ("unknown_method", render(method="magic"), ParameterError, ["unknown method 'magic'", "hard"]),
+    ("method_not_implemented", render(method="pvmf"), ParameterError, ["'pvmf'", "not implemented"]),
+    ("unknown_parameter", render(kernel=3), ParameterError, ["kernel", "map_size"]),
+    ("map_size_too_small", render(map_size=8), ParameterError, ["map_size", "[16, 16384]", "8"]),
+    ("map_size_wrong_type", render(map_size="big"), ParameterError, ["map_size", "integer"]),
+    ("map_size_float", render(map_size=512.0), ParameterError, ["map_size", "integer"]),
+    ("bias_unknown", render(bias="magic"), ParameterError, ["bias", "slope", "second_depth"]),
+    ("offset_negative", render(normal_offset=-1.0), ParameterError, ["normal_offset"]),
+    ("offset_nan", render(normal_offset=float("nan")), ParameterError, ["normal_offset"]),
+    ("param_unsupported_type", render(map_size=[1, 2]), ParameterError, ["map_size", "unsupported type"]),
+    ("timing_mode", lambda r: penumbra.Renderer(timing="sometimes"), ParameterError, ["timing"]),
+    # Outputs
+    ("image_extension", lambda r: penumbra.write_image("out.bmp", np.zeros((2, 2), np.float32)), ParameterError, [".png or .exr"]),
+    ("image_shape", lambda r: penumbra.write_image("out.png", np.zeros((2, 2, 4), np.float32)), ParameterError, ["(H, W)"]),
+    ("exr_nan", lambda r: penumbra.write_image("out.exr", np.full((2, 2), np.nan, np.float32)), ParameterError, ["non-finite"]),
+]
+
+
+@pytest.mark.parametrize("action, error, words", [c[1:] for c in CASES], ids=[c[0] for c in CASES])
+def test_bad_input_raises_a_typed_error(renderer: penumbra.Renderer, action: Callable[..., Any], error: type[Exception], words: list[str], tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(error) as info:
+        action(renderer)
+    message = str(info.value)
+    for word in words:
+        assert word in message, f"{word!r} not in {message!r}"
+    assert isinstance(info.value, penumbra.PenumbraError)
+    assert isinstance(info.value, ValueError), "input errors are ValueErrors too"
+
+
+def test_renderer_still_works_after_errors(renderer: penumbra.Renderer) -> None:
+    for _, action, error, _ in CASES[:10]:
+        with pytest.raises(error):
+            action(renderer)
+    result = render()(renderer)
+    assert np.isfinite(result.radiance).all() and result.visibility.max() == 1.0
