@@ -14,6 +14,8 @@ from typing import Any, final
 import numpy as np
 import numpy.typing as npt
 
+__all__ = ["adapter_info", "methods", "write_image", "Renderer", "__version__"]
+
 __version__: str
 
 def adapter_info() -> dict[str, Any]: ...

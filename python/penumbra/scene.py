@@ -164,7 +164,7 @@ class SphereLight:
                 raise LightError("a radius-0 light has no area, so radiance cannot set its power; give intensity")
             with np.errstate(over="ignore"):
                 self.intensity = _rgb(radiance, "light radiance", LightError) * np.float32(math.pi * self.radius**2)
-        else:
+        elif intensity is not None:
             self.intensity = _rgb(intensity, "light intensity", LightError)
 
     @property

@@ -1,0 +1,69 @@
+"""Shadow-map bias schemes of method `hard` against exact ray casting.
+
+For every built-in scene with a point light (radius 0), renders `hard` with
+each bias scheme and map size, casts a ray from every pixel's surface point
+to the light on the CPU, and counts the pixels where they disagree:
+- acne: shadowed by the method, lit in truth;
+- leak: lit by the method, shadowed in truth;
+each split into those on the one-pixel band around the true shadow outline
+(resolution, not bias) and those beyond it (the bias's fault).
+
+    python benchmarks/bias_study.py [--size 256]
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+import penumbra
+from penumbra.raycast import outline_band, point_light_visibility
+
+
+def disagreement(result: penumbra.RenderResult, exact: np.ndarray) -> dict[str, int]:
+    geometry = result.object_id >= 0
+    lit_truth = exact > 0.5
+    lit_method = result.visibility > 0.5
+    band = outline_band(lit_truth)
+    acne = geometry & lit_truth & ~lit_method
+    leak = geometry & ~lit_truth & lit_method
+    return {
+        "acne": int((acne & ~band).sum()),
+        "leak": int((leak & ~band).sum()),
+        "acne_on_outline": int((acne & band).sum()),
+        "leak_on_outline": int((leak & band).sum()),
+        "pixels": int(geometry.sum()),
+    }
+
+
+def exact_visibility(scene: penumbra.Scene, result: penumbra.RenderResult) -> np.ndarray:
+    geometry = result.object_id >= 0
+    exact = np.zeros(geometry.shape)
+    exact[geometry] = point_light_visibility(scene, result.position[geometry], result.normal[geometry])
+    return exact
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--size", type=int, default=256)
+    parser.add_argument("--map-sizes", type=int, nargs="+", default=[512, 2048])
+    args = parser.parse_args()
+    renderer = penumbra.Renderer()
+    print(f"adapter: {renderer.adapter_info['name']}; image {args.size}x{args.size}; light radius 0\n")
+    print("| scene | map_size | bias | acne | leak | acne on outline | leak on outline | geometry pixels |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name in penumbra.scenes.names():
+        scene = penumbra.scenes.get(name, width=args.size, height=args.size, light_radius=0.0)
+        exact = None
+        for map_size in args.map_sizes:
+            for bias in ("slope", "second_depth", "none"):
+                result = renderer.render(scene, map_size=map_size, bias=bias)
+                if exact is None:
+                    exact = exact_visibility(scene, result)
+                d = disagreement(result, exact)
+                print(f"| {name} | {map_size} | {bias} | {d['acne']} | {d['leak']} | {d['acne_on_outline']} | {d['leak_on_outline']} | {d['pixels']} |")
+
+
+if __name__ == "__main__":
+    main()
