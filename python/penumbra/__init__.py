@@ -5,12 +5,15 @@ Build a :class:`Scene` from numpy arrays or trimesh meshes (or take one from
 name, and get linear float32 numpy arrays, per-pass timings and statistics back.
 """
 
-from penumbra import errors, scenes
+from typing import Any
+
+from penumbra import errors, metrics, scenes
 from penumbra._core import __version__
 from penumbra.errors import (
     CameraError,
     GpuError,
     GpuUnavailableError,
+    GroundTruthError,
     InvalidInputError,
     LightError,
     MeshError,
@@ -26,6 +29,8 @@ __all__ = [
     "__version__",
     "errors",
     "scenes",
+    "metrics",
+    "compare",
     "Renderer",
     "RenderResult",
     "adapter_info",
@@ -45,4 +50,14 @@ __all__ = [
     "GpuUnavailableError",
     "GpuError",
     "PenumbraIOError",
+    "GroundTruthError",
 ]
+
+
+def compare(*args: Any, **kwargs: Any) -> Any:
+    """Renders a method and Mitsuba ground truth of the same scene and measures
+    the difference; see :func:`penumbra.comparison.compare`. (Imported lazily:
+    Mitsuba is only needed here.)"""
+    from penumbra.comparison import compare as _compare
+
+    return _compare(*args, **kwargs)

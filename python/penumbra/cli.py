@@ -1,4 +1,4 @@
-"""The command line: ``penumbra render | scenes | info``."""
+"""The command line: ``penumbra render | compare | scenes | methods | info``."""
 
 from __future__ import annotations
 
@@ -30,14 +30,19 @@ def _param(text: str) -> tuple[str, Any]:
     return key.strip(), value
 
 
-def _render(args: argparse.Namespace) -> int:
+def _scene(args: argparse.Namespace) -> scenes.Scene:
     if args.mesh:
-        size = {k: v for k, v in (('width', args.width), ('height', args.height)) if v is not None}
+        size = {k: v for k, v in (("width", args.width), ("height", args.height)) if v is not None}
         scene = scenes.from_mesh(args.mesh, **size)
     else:
         scene = scenes.get(args.scene, width=args.width, height=args.height)
     if args.light_radius is not None:
         scene = scene.with_light(scene.light.with_radius(args.light_radius))
+    return scene
+
+
+def _render(args: argparse.Namespace) -> int:
+    scene = _scene(args)
     params = dict(_param(p) for p in args.param)
     renderer = Renderer()
     result = renderer.render(scene, args.method, **params)
@@ -51,22 +56,53 @@ def _render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _compare(args: argparse.Namespace) -> int:
+    from penumbra.comparison import compare
+    from penumbra.metrics import summary
+
+    scene = _scene(args)
+    params = dict(_param(p) for p in args.param)
+    c = compare(scene, args.method, spp=args.spp, cache_dir=args.cache_dir, out=args.output, **params)
+    gt = c.ground_truth
+    print(f"scene {scene.name}: method {c.result.method} {json.dumps(c.result.params)}")
+    print(f"penumbra: {c.result.total_ms:.1f} ms ({c.result.timing_source}); "
+          f"mitsuba {gt.variant}, {gt.spp} spp: " + ", ".join(f"{k} {v:.2f} s{' (cached)' if gt.cached[k] else ''}" for k, v in gt.seconds.items()))
+    print(summary(c.metrics))
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"scene": scene.name, "method": c.result.method, "params": c.result.params, "metrics": c.metrics}, f, indent=2)
+    print(f"wrote the comparison to {args.output}")
+    return 0
+
+
+def _scene_arguments(parser: argparse.ArgumentParser) -> None:
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument("--scene", default=scenes.DEFAULT, help=f"built-in scene (default {scenes.DEFAULT}; see `penumbra scenes`)")
+    source.add_argument("--mesh", help="a mesh file trimesh can read, placed on the ground plane")
+    parser.add_argument("--method", default="hard", help="shadow method (default hard)")
+    parser.add_argument("--width", type=int, help="image width in pixels")
+    parser.add_argument("--height", type=int, help="image height in pixels")
+    parser.add_argument("--light-radius", type=float, help="override the light's radius")
+    parser.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="method parameter, repeatable")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="penumbra", description="Headless soft-shadow renderer.")
     sub = parser.add_subparsers(dest="command", required=True)
 
     render = sub.add_parser("render", help="render a built-in scene or a mesh file")
-    source = render.add_mutually_exclusive_group()
-    source.add_argument("--scene", default=scenes.DEFAULT, help=f"built-in scene (default {scenes.DEFAULT}; see `penumbra scenes`)")
-    source.add_argument("--mesh", help="a mesh file trimesh can read, placed on the ground plane")
-    render.add_argument("--method", default="hard", help="shadow method (default hard)")
-    render.add_argument("--width", type=int, help="image width in pixels")
-    render.add_argument("--height", type=int, help="image height in pixels")
-    render.add_argument("--light-radius", type=float, help="override the light's radius")
-    render.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="method parameter, repeatable")
+    _scene_arguments(render)
     render.add_argument("--image", default="radiance", help="which image to write (radiance, visibility, depth, ...)")
     render.add_argument("-o", "--output", default="penumbra.png", help="output file: .png (sRGB), .exr or .npy (linear)")
     render.set_defaults(run=_render)
+
+    comp = sub.add_parser("compare", help="render a method and Mitsuba ground truth, print the metrics, write a side-by-side PNG")
+    _scene_arguments(comp)
+    comp.add_argument("--spp", type=int, default=256, help="ground-truth samples per pixel (default 256)")
+    comp.add_argument("--cache-dir", help="ground-truth cache folder (default $PENUMBRA_CACHE_DIR or ~/.cache/penumbra)")
+    comp.add_argument("--json", help="also write the metrics to this JSON file")
+    comp.add_argument("-o", "--output", default="compare.png", help="the comparison picture (PNG)")
+    comp.set_defaults(run=_compare)
 
     sub.add_parser("scenes", help="list the built-in scenes").set_defaults(run=lambda a: print("\n".join(scenes.names())) or 0)
     sub.add_parser("methods", help="list the implemented methods").set_defaults(run=lambda a: print("\n".join(methods())) or 0)

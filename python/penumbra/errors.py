@@ -18,6 +18,7 @@ __all__ = [
     "GpuUnavailableError",
     "GpuError",
     "PenumbraIOError",
+    "GroundTruthError",
 ]
 
 
@@ -62,3 +63,8 @@ class GpuError(PenumbraError, RuntimeError):
 
 class PenumbraIOError(PenumbraError, OSError):
     """Writing an output file failed."""
+
+
+class GroundTruthError(PenumbraError, RuntimeError):
+    """Mitsuba ground truth cannot be rendered (Mitsuba missing, no usable
+    variant for the requested images, or the export refused)."""
