@@ -14,7 +14,30 @@ from typing import Any, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["adapter_info", "methods", "write_image", "Renderer", "__version__"]
+from penumbra.errors import CameraError as CameraError
+from penumbra.errors import GpuError as GpuError
+from penumbra.errors import GpuUnavailableError as GpuUnavailableError
+from penumbra.errors import LightError as LightError
+from penumbra.errors import MeshError as MeshError
+from penumbra.errors import ParameterError as ParameterError
+from penumbra.errors import PenumbraIOError as PenumbraIOError
+from penumbra.errors import SceneError as SceneError
+
+__all__ = [
+    "adapter_info",
+    "methods",
+    "write_image",
+    "Renderer",
+    "__version__",
+    "MeshError",
+    "LightError",
+    "CameraError",
+    "SceneError",
+    "ParameterError",
+    "GpuUnavailableError",
+    "GpuError",
+    "PenumbraIOError",
+]
 
 __version__: str
 

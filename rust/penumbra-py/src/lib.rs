@@ -284,6 +284,18 @@ mod _core {
     #[pymodule_init]
     fn init(m: &pyo3::Bound<'_, pyo3::types::PyModule>) -> pyo3::PyResult<()> {
         use pyo3::types::PyModuleMethods;
-        m.add("__version__", env!("CARGO_PKG_VERSION"))
+        use pyo3::PyTypeInfo;
+        let py = m.py();
+        m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        // The classes this module raises, so that `_core.pyi` declares them.
+        m.add("MeshError", super::MeshError::type_object(py))?;
+        m.add("LightError", super::LightError::type_object(py))?;
+        m.add("CameraError", super::CameraError::type_object(py))?;
+        m.add("SceneError", super::SceneError::type_object(py))?;
+        m.add("ParameterError", super::ParameterError::type_object(py))?;
+        m.add("GpuUnavailableError", super::GpuUnavailableError::type_object(py))?;
+        m.add("GpuError", super::GpuError::type_object(py))?;
+        m.add("PenumbraIOError", super::PenumbraIOError::type_object(py))?;
+        Ok(())
     }
 }
