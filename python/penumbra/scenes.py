@@ -1,8 +1,9 @@
 """Built-in scenes, generated in code: ``names()`` lists them, ``get(name)``
 builds one with its camera and light.
 
-Each is a caster (or several) over a 10 x 10 ground plane at y = 0, lit by a
-sphere light above, seen by a camera from the front and above:
+Each is a caster (or several) over a 10 x 10 ground slab whose top is at
+y = 0 (closed, so the silhouette methods accept it), lit by a sphere light
+above, seen by a camera from the front and above:
 
 - ``sphere_on_plane``: a sphere floating over the plane (the default scene).
 - ``cube_on_plane``: a rotated cube floating over the plane.
@@ -23,7 +24,7 @@ import trimesh
 from penumbra.errors import MeshError, ParameterError
 from penumbra.scene import Camera, Mesh, Scene, SphereLight
 
-__all__ = ["names", "get", "DEFAULT", "ground_plane", "sphere", "box", "from_mesh"]
+__all__ = ["names", "get", "DEFAULT", "ground_plane", "ground_slab", "sphere", "box", "from_mesh"]
 
 DEFAULT = "sphere_on_plane"
 _WIDTH, _HEIGHT = 512, 512
@@ -35,6 +36,14 @@ def ground_plane(half_size: float = 5.0, albedo: float = 0.8, object_id: int = 0
     vertices = np.array([[-h, 0, -h], [h, 0, -h], [h, 0, h], [-h, 0, h]], dtype=np.float32)
     faces = np.array([[0, 2, 1], [0, 3, 2]], dtype=np.uint32)
     return Mesh(vertices, faces, albedo=albedo, object_id=object_id, name="ground")
+
+
+def ground_slab(half_size: float = 5.0, thickness: float = 0.2, albedo: float = 0.8, object_id: int = 0) -> Mesh:
+    """A closed box whose top face is the square at y = 0 (a ground that
+    PVM and the other silhouette methods accept: they need closed casters)."""
+    m = trimesh.creation.box(extents=(2 * half_size, thickness, 2 * half_size))
+    vertices = np.asarray(m.vertices) - (0.0, thickness / 2, 0.0)
+    return Mesh(vertices, m.faces, albedo=albedo, object_id=object_id, name="ground")
 
 
 def sphere(center: tuple[float, float, float], radius: float, *, subdivisions: int = 4, albedo: float = 0.7, object_id: int = 1, name: str = "sphere") -> Mesh:
@@ -61,11 +70,11 @@ def _light(radius: float) -> SphereLight:
 
 
 def _sphere_on_plane() -> Scene:
-    return Scene([ground_plane(), sphere((0.0, 1.6, 0.0), 1.0)], _light(0.5), _camera(), name="sphere_on_plane")
+    return Scene([ground_slab(), sphere((0.0, 1.6, 0.0), 1.0)], _light(0.5), _camera(), name="sphere_on_plane")
 
 
 def _cube_on_plane() -> Scene:
-    return Scene([ground_plane(), box((0.0, 1.6, 0.0), (1.5, 1.5, 1.5), yaw_degrees=30.0)], _light(0.5), _camera(), name="cube_on_plane")
+    return Scene([ground_slab(), box((0.0, 1.6, 0.0), (1.5, 1.5, 1.5), yaw_degrees=30.0)], _light(0.5), _camera(), name="cube_on_plane")
 
 
 def _overlapping_casters() -> Scene:
@@ -73,11 +82,11 @@ def _overlapping_casters() -> Scene:
         sphere((0.6, 3.2, 0.4), 0.6, object_id=1, name="high_sphere"),
         box((-0.4, 1.2, -0.2), (1.4, 0.4, 1.4), yaw_degrees=15.0, object_id=2, name="low_box"),
     ]
-    return Scene([ground_plane(), *casters], _light(0.5), _camera(), name="overlapping_casters")
+    return Scene([ground_slab(), *casters], _light(0.5), _camera(), name="overlapping_casters")
 
 
 def _resting_box() -> Scene:
-    return Scene([ground_plane(), box((0.0, 1.0, 0.0), (0.8, 2.0, 0.8), yaw_degrees=20.0)], _light(0.8), _camera(), name="resting_box")
+    return Scene([ground_slab(), box((0.0, 1.0, 0.0), (0.8, 2.0, 0.8), yaw_degrees=20.0)], _light(0.8), _camera(), name="resting_box")
 
 
 _SCENES: dict[str, Callable[[], Scene]] = {
@@ -129,4 +138,4 @@ def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_ra
     name = str(path).rsplit("/", 1)[-1]
     mesh = Mesh(vertices, np.asarray(loaded.faces), albedo=0.7, object_id=1, name=name)
     camera = _camera().with_size(width, height)
-    return Scene([ground_plane(), mesh], _light(light_radius), camera, name=name)
+    return Scene([ground_slab(), mesh], _light(light_radius), camera, name=name)

@@ -10,6 +10,7 @@ pub mod passes;
 pub mod renderer;
 pub mod scene;
 pub mod shaders;
+pub mod topology;
 
 pub use error::{Error, Result};
 pub use gpu::{adapter_summary, AdapterSummary, TimingSource, Timings};

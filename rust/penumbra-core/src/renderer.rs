@@ -12,6 +12,7 @@ use crate::gpu::readback::{self, PendingReadback};
 use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
 use crate::light_frustum::LightFrustum;
 use crate::methods::hard::HardShadow;
+use crate::methods::pvm::PenumbraVolumeMaps;
 use crate::methods::{MethodConfig, ParamValue};
 use crate::passes::gbuffer::{GBuffer, GBufferPass};
 use crate::passes::shading::{ShadingPass, RADIANCE_FORMAT};
@@ -65,6 +66,26 @@ impl RenderResult {
     }
 }
 
+/// A method's intermediate image, read back on request.
+struct Intermediate<'a> {
+    name: &'static str,
+    texture: &'a wgpu::Texture,
+    aspect: wgpu::TextureAspect,
+    /// Channels kept of those stored.
+    channels: usize,
+    /// A linear-depth map storing depth / far.
+    linear_depth: bool,
+}
+
+impl<'a> Intermediate<'a> {
+    fn depth(name: &'static str, texture: &'a wgpu::Texture) -> Self {
+        Self { name, texture, aspect: wgpu::TextureAspect::DepthOnly, channels: 1, linear_depth: true }
+    }
+    fn color(name: &'static str, texture: &'a wgpu::Texture, channels: usize) -> Self {
+        Self { name, texture, aspect: wgpu::TextureAspect::All, channels, linear_depth: false }
+    }
+}
+
 pub struct Renderer {
     ctx: GpuContext,
     use_timestamps: bool,
@@ -72,6 +93,7 @@ pub struct Renderer {
     shadow_map: ShadowMapPass,
     shading: ShadingPass,
     hard: HardShadow,
+    pvm: PenumbraVolumeMaps,
 }
 
 impl Renderer {
@@ -80,15 +102,16 @@ impl Renderer {
     pub fn new(use_timestamps: bool) -> Result<Self> {
         let ctx = GpuContext::new()?;
         let device = &ctx.device;
-        let (gbuffer, shadow_map, shading, hard) = ctx.scoped(|| {
+        let (gbuffer, shadow_map, shading, hard, pvm) = ctx.scoped(|| {
             Ok((
                 GBufferPass::new(device),
                 ShadowMapPass::new(device),
                 ShadingPass::new(device),
                 HardShadow::new(device),
+                PenumbraVolumeMaps::new(device),
             ))
         })?;
-        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard })
+        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, pvm })
     }
 
     pub fn adapter(&self) -> &AdapterSummary {
@@ -108,7 +131,7 @@ impl Renderer {
                 camera.width, camera.height
             )));
         }
-        let MethodConfig::Hard(p) = method;
+        let p = method.shadow_map();
         if p.map_size > max {
             return Err(Error::InvalidParameter(format!(
                 "map_size {} exceeds this adapter's largest texture side, {max}",
@@ -180,24 +203,50 @@ impl Renderer {
             ("triangles".to_owned(), prepared.triangle_count as i64),
             ("degenerate_triangles".to_owned(), prepared.degenerate_triangles as i64),
         ]);
-        let mut intermediates: Vec<(&str, &wgpu::Texture, wgpu::TextureAspect)> = Vec::new();
-        let shadow_map;
+        let mut intermediates: Vec<Intermediate<'_>> = Vec::new();
+        // Pass 1 of every method here: the shadow map from the light centre.
+        let settings = method.shadow_map();
+        let shadow_map = ShadowMapPass::create_map(device, settings.map_size);
+        profiler.pass("shadow_map", |encoder, ts| {
+            self.shadow_map.record(device, encoder, &shadow_map, frustum, settings.bias.culling(), &vertices, vertex_count, ts)
+        })?;
+        stats.insert("shadow_maps_rendered".into(), 1);
+        stats.insert("map_size".into(), settings.map_size as i64);
+        intermediates.push(Intermediate::depth("shadow_map", &shadow_map));
+        let light = (scene.light.center, scene.light.radius);
+        let pvm_frame;
+        let mut counter = None;
         match method {
             MethodConfig::Hard(params) => {
-                shadow_map = ShadowMapPass::create_map(device, params.map_size);
-                profiler.pass("shadow_map", |encoder, ts| {
-                    self.shadow_map.record(
-                        device, encoder, &shadow_map, frustum, params.bias.culling(), &vertices, vertex_count, ts,
-                    )
-                })?;
                 profiler.pass("visibility", |encoder, ts| {
                     self.hard.record_visibility(
                         device, encoder, params, &gbuffer, &shadow_map, frustum, scene.light.center, &visibility, ts,
                     )
                 })?;
-                stats.insert("shadow_maps_rendered".into(), 1);
-                stats.insert("map_size".into(), params.map_size as i64);
-                intermediates.push(("shadow_map", &shadow_map, wgpu::TextureAspect::DepthOnly));
+            }
+            MethodConfig::Pvm(params) => {
+                let l = glam::Vec3::from(light.0).as_dvec3();
+                let mut built = None;
+                profiler.pass("penumbra_volumes", |encoder, ts| {
+                    built = Some(self.pvm.record_volumes(device, encoder, params, prepared, frustum, (l, light.1 as f64), size, ts));
+                })?;
+                pvm_frame = built.expect("the pass ran")?;
+                profiler.pass("visibility", |encoder, ts| {
+                    self.pvm.record_visibility(
+                        device, encoder, params, &pvm_frame, &gbuffer, &shadow_map, frustum, light, &visibility, ts,
+                    )
+                })?;
+                let s = &pvm_frame.stats;
+                stats.insert("silhouette_edges".into(), s.silhouette_edges as i64);
+                stats.insert("penumbra_volumes".into(), s.volume_quads as i64);
+                stats.insert("silhouette_junction_vertices".into(), s.junction_vertices as i64);
+                stats.insert("light_parallel_edges".into(), s.light_parallel_edges as i64);
+                stats.insert("silhouette_cache_hits".into(), pvm_frame.cache_hits as i64);
+                counter = Some(&pvm_frame.counter);
+                intermediates.push(Intermediate::depth("pvm_volume_depth", &pvm_frame.volume_depth));
+                intermediates.push(Intermediate::color("pvm_edge0", &pvm_frame.edge0, 3));
+                intermediates.push(Intermediate::color("pvm_edge1", &pvm_frame.edge1, 3));
+                intermediates.push(Intermediate::color("pvm_in_volume", &pvm_frame.membership, 1));
             }
         }
         profiler.pass("shading", |encoder, ts| {
@@ -218,8 +267,11 @@ impl Renderer {
         if !options.intermediates {
             intermediates.clear();
         }
-        for (_, texture, aspect) in &intermediates {
-            pending.push(readback::copy_texture(device, &mut encoder, texture, *aspect));
+        if let Some(counter) = counter {
+            pending.push(readback::copy_buffer(device, &mut encoder, counter, 4));
+        }
+        for i in &intermediates {
+            pending.push(readback::copy_texture(device, &mut encoder, i.texture, i.aspect));
         }
         self.ctx.queue.submit([encoder.finish()]);
         let mut bytes = readback::map_all(&self.ctx, &pending)?.into_iter();
@@ -255,19 +307,25 @@ impl Renderer {
             .collect();
         stats.insert("geometry_pixels".into(), object_id.iter().filter(|&&i| i >= 0).count() as i64);
         images.push(Image { name: "object_id".into(), shape: vec![h, w], data: ImageData::I32(object_id) });
-        for (i, (name, texture, _)) in intermediates.iter().enumerate() {
-            let mut data = next();
-            if name.starts_with("shadow_map") {
+        if counter.is_some() {
+            let count: Vec<u32> = readback::cast_vec(bytes.next().unwrap_or_default());
+            stats.insert("pixels_in_volume".into(), count.first().copied().unwrap_or(0) as i64);
+        }
+        for i in &intermediates {
+            let raw = readback::cast_vec::<f32>(bytes.next().unwrap_or_default());
+            let (w, h) = (i.texture.width() as usize, i.texture.height() as usize);
+            let stored = raw.len() / (w * h).max(1);
+            let mut data: Vec<f32> = if stored == i.channels {
+                raw
+            } else {
+                raw.chunks_exact(stored).flat_map(|t| t[..i.channels].to_vec()).collect()
+            };
+            if i.linear_depth {
                 // Stored as depth / far: hand back world-unit light depth.
                 data.iter_mut().for_each(|d| *d *= frustum.far);
             }
-            let p = &pending[4 + i];
-            debug_assert_eq!((p.width(), p.height()), (texture.width(), texture.height()));
-            images.push(Image {
-                name: (*name).into(),
-                shape: vec![p.height() as usize, p.width() as usize],
-                data: ImageData::F32(data),
-            });
+            let shape = if i.channels == 1 { vec![h, w] } else { vec![h, w, i.channels] };
+            images.push(Image { name: i.name.into(), shape, data: ImageData::F32(data) });
         }
         let mut timings = timings;
         timings.passes.push(("readback".into(), readback_start.elapsed().as_secs_f64() * 1e3));

@@ -71,6 +71,8 @@ pub struct Scene {
 #[derive(Debug, Clone)]
 pub struct PreparedScene {
     pub corners: Vec<CornerVertex>,
+    /// Per mesh: world-space vertices and faces, for the silhouette methods.
+    pub meshes: Vec<PreparedMesh>,
     /// Per mesh: albedo and object id, indexed by `CornerVertex::mesh_index`.
     pub materials: Vec<([f32; 3], i32)>,
     pub bounds_min: Vec3,
@@ -78,6 +80,13 @@ pub struct PreparedScene {
     pub triangle_count: usize,
     /// Triangles whose area is zero to working precision; they draw nothing.
     pub degenerate_triangles: usize,
+}
+
+#[derive(Debug, Clone)]
+pub struct PreparedMesh {
+    pub name: String,
+    pub vertices: Vec<DVec3>,
+    pub faces: Vec<[u32; 3]>,
 }
 
 /// One triangle corner as the G-buffer and shadow-map passes read it.
@@ -336,6 +345,7 @@ impl Scene {
         let light_center = dvec(self.light.center);
         let light_radius = self.light.radius as f64;
         let mut corners = Vec::new();
+        let mut meshes = Vec::with_capacity(self.meshes.len());
         let mut materials = Vec::with_capacity(self.meshes.len());
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -372,10 +382,12 @@ impl Scene {
                 }
             }
             materials.push((mesh.albedo, mesh.object_id));
+            meshes.push(PreparedMesh { name: mesh.name.clone(), vertices: world, faces: mesh.faces.clone() });
         }
         Ok(PreparedScene {
             triangle_count: corners.len() / 3,
             corners,
+            meshes,
             materials,
             bounds_min: lo.as_vec3(),
             bounds_max: hi.as_vec3(),

@@ -4,6 +4,7 @@
 
 pub const COMMON: &str = include_str!("shaders/common.wgsl");
 pub const LIGHT_SPACE: &str = include_str!("shaders/light_space.wgsl");
+pub const SHADOW_TEST: &str = include_str!("shaders/shadow_test.wgsl");
 
 /// Concatenates snippets into one module source.
 pub fn compose(parts: &[&str]) -> String {
@@ -23,7 +24,15 @@ pub fn shading() -> String {
 }
 
 pub fn hard() -> String {
-    compose(&[COMMON, LIGHT_SPACE, include_str!("methods/hard.wgsl")])
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/hard.wgsl")])
+}
+
+pub fn pvm_volumes() -> String {
+    compose(&[include_str!("methods/pvm_volumes.wgsl")])
+}
+
+pub fn pvm() -> String {
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/pvm.wgsl")])
 }
 
 /// Every composed shader with the files it is made of (relative to `src/`).
@@ -35,7 +44,13 @@ pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
         (
             "hard",
             hard(),
-            &["shaders/common.wgsl", "shaders/light_space.wgsl", "methods/hard.wgsl"],
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/hard.wgsl"],
+        ),
+        ("pvm_volumes", pvm_volumes(), &["methods/pvm_volumes.wgsl"]),
+        (
+            "pvm",
+            pvm(),
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/pvm.wgsl"],
         ),
     ]
 }

@@ -55,6 +55,18 @@ pub fn copy_texture(
     PendingReadback { buffer, width, height, row_bytes, padded_row_bytes }
 }
 
+/// Records a copy of the first `bytes` (a multiple of 4) of `source` into a mappable buffer.
+pub fn copy_buffer(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, source: &wgpu::Buffer, bytes: u32) -> PendingReadback {
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("penumbra::readback_buffer"),
+        size: bytes as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    encoder.copy_buffer_to_buffer(source, 0, &buffer, 0, bytes as u64);
+    PendingReadback { buffer, width: bytes / 4, height: 1, row_bytes: bytes, padded_row_bytes: bytes }
+}
+
 impl PendingReadback {
     pub fn width(&self) -> u32 {
         self.width

@@ -32,7 +32,7 @@ pub enum BiasMode {
 impl BiasMode {
     const NAMES: [&'static str; 3] = ["slope", "second_depth", "none"];
 
-    fn name(self) -> &'static str {
+    pub fn name(self) -> &'static str {
         match self {
             BiasMode::Slope => "slope",
             BiasMode::SecondDepth => "second_depth",
@@ -48,8 +48,9 @@ impl BiasMode {
     }
 }
 
+/// The shadow map and its test, as `hard` and `pvm` take them.
 #[derive(Debug, Clone, PartialEq)]
-pub struct HardParams {
+pub struct ShadowMapSettings {
     pub map_size: u32,
     pub bias: BiasMode,
     pub normal_offset: f32,
@@ -57,11 +58,14 @@ pub struct HardParams {
     pub slope_bias: f32,
 }
 
+/// `hard` is the shadow-map test alone.
+pub type HardParams = ShadowMapSettings;
+
 /// Largest tan(theta) the slope term uses: beyond ~84 degrees the receiver is
 /// nearly edge-on to the light and its irradiance is almost zero anyway.
 const MAX_SLOPE: f32 = 10.0;
 
-impl HardParams {
+impl ShadowMapSettings {
     pub fn read(r: &mut ParamReader<'_>) -> Result<Self> {
         Ok(Self {
             map_size: r.int("map_size", 2048, 16, 16384)? as u32,
@@ -85,11 +89,27 @@ impl HardParams {
             ("slope_bias".into(), ParamValue::Float(self.slope_bias as f64)),
         ])
     }
+
+    /// The `ShadowTest` uniform of `shaders/shadow_test.wgsl`.
+    pub fn uniform(&self, frustum: &LightFrustum, center: [f32; 3], radius: f32, flags: u32) -> ShadowTestUniform {
+        let mode = match self.bias {
+            BiasMode::Slope => 0,
+            BiasMode::SecondDepth => 1,
+            BiasMode::None => 2,
+        };
+        ShadowTestUniform {
+            light_space: LightSpaceUniform::new(frustum, self.map_size),
+            center: [center[0], center[1], center[2], radius],
+            bias: [self.normal_offset, self.constant_bias, self.slope_bias, MAX_SLOPE],
+            mode: [mode, flags, 0, 0],
+        }
+    }
 }
 
+/// Uniform layout of `ShadowTest` in `shaders/shadow_test.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct HardUniforms {
+pub struct ShadowTestUniform {
     light_space: LightSpaceUniform,
     center: [f32; 4],
     bias: [f32; 4],
@@ -132,19 +152,9 @@ impl HardShadow {
         visibility: &wgpu::Texture,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
-        let mode = match params.bias {
-            BiasMode::Slope => 0,
-            BiasMode::SecondDepth => 1,
-            BiasMode::None => 2,
-        };
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("hard::uniforms"),
-            contents: bytemuck::bytes_of(&HardUniforms {
-                light_space: LightSpaceUniform::new(frustum, params.map_size),
-                center: [light_center[0], light_center[1], light_center[2], 0.0],
-                bias: [params.normal_offset, params.constant_bias, params.slope_bias, MAX_SLOPE],
-                mode: [mode, 0, 0, 0],
-            }),
+            contents: bytemuck::bytes_of(&params.uniform(frustum, light_center, 0.0, 0)),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let map_view = layout::view(shadow_map);

@@ -6,8 +6,10 @@ use std::collections::BTreeMap;
 use crate::error::{Error, Result};
 
 pub mod hard;
+pub mod pvm;
 
-pub use hard::{BiasMode, HardParams};
+pub use hard::{BiasMode, HardParams, ShadowMapSettings};
+pub use pvm::PvmParams;
 
 /// A parameter value as it arrives from Python or the CLI.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,7 +38,7 @@ pub const METHODS: &[(&str, bool)] = &[
     ("pcss", false),
     ("reference", false),
     ("adaptive", false),
-    ("pvm", false),
+    ("pvm", true),
     ("pvmf", false),
     ("wedges", false),
     ("backprojection", false),
@@ -46,6 +48,7 @@ pub const METHODS: &[(&str, bool)] = &[
 #[derive(Debug, Clone, PartialEq)]
 pub enum MethodConfig {
     Hard(HardParams),
+    Pvm(PvmParams),
 }
 
 impl MethodConfig {
@@ -53,6 +56,7 @@ impl MethodConfig {
         let mut reader = ParamReader::new(method, params);
         let config = match method {
             "hard" => MethodConfig::Hard(HardParams::read(&mut reader)?),
+            "pvm" => MethodConfig::Pvm(PvmParams::read(&mut reader)?),
             _ => {
                 let implemented: Vec<&str> = METHODS.iter().filter(|m| m.1).map(|m| m.0).collect();
                 return Err(Error::InvalidParameter(
@@ -71,6 +75,7 @@ impl MethodConfig {
     pub fn name(&self) -> &'static str {
         match self {
             MethodConfig::Hard(_) => "hard",
+            MethodConfig::Pvm(_) => "pvm",
         }
     }
 
@@ -78,6 +83,15 @@ impl MethodConfig {
     pub fn effective_params(&self) -> BTreeMap<String, ParamValue> {
         match self {
             MethodConfig::Hard(p) => p.effective(),
+            MethodConfig::Pvm(p) => p.effective(),
+        }
+    }
+
+    /// The shadow map this method renders from the light centre.
+    pub fn shadow_map(&self) -> &ShadowMapSettings {
+        match self {
+            MethodConfig::Hard(p) => p,
+            MethodConfig::Pvm(p) => &p.shadow,
         }
     }
 }
@@ -134,6 +148,15 @@ impl<'a> ParamReader<'a> {
             return Err(self.out_of_range(name, value, &format!("[{min}, {max}]")));
         }
         Ok(value)
+    }
+
+    pub fn bool(&mut self, name: &'static str, default: bool) -> Result<bool> {
+        self.known.push(name);
+        match self.params.get(name) {
+            None => Ok(default),
+            Some(ParamValue::Bool(b)) => Ok(*b),
+            Some(other) => Err(self.wrong_type(name, "a bool", other)),
+        }
     }
 
     pub fn choice(&mut self, name: &'static str, default: &'static str, choices: &[&'static str]) -> Result<&'static str> {

@@ -19,7 +19,7 @@ pub enum Culling {
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ShadowUniforms {
+pub struct ShadowUniforms {
     view_proj: [[f32; 4]; 4],
     view: [[f32; 4]; 4],
     depth: [f32; 4],
@@ -100,11 +100,7 @@ impl ShadowMapPass {
     ) {
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("shadow_map::uniforms"),
-            contents: bytemuck::bytes_of(&ShadowUniforms {
-                view_proj: super::mat4(frustum.projection * frustum.view),
-                view: super::mat4(frustum.view),
-                depth: [frustum.near, frustum.far, 0.0, 0.0],
-            }),
+            contents: bytemuck::bytes_of(&shadow_uniforms(frustum)),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let bind_group = layout::bind_group(device, "shadow_map::bind_group", &self.layout, &[uniforms.as_entire_binding()]);
@@ -128,6 +124,15 @@ impl ShadowMapPass {
         pass.set_bind_group(0, &bind_group, &[]);
         pass.set_vertex_buffer(0, vertices.slice(..));
         pass.draw(0..vertex_count, 0..1);
+    }
+}
+
+/// The light's view for passes that rasterise from it (shadow maps, volumes).
+pub fn shadow_uniforms(frustum: &LightFrustum) -> ShadowUniforms {
+    ShadowUniforms {
+        view_proj: super::mat4(frustum.projection * frustum.view),
+        view: super::mat4(frustum.view),
+        depth: [frustum.near, frustum.far, 0.0, 0.0],
     }
 }
 

@@ -1,0 +1,56 @@
+// The shadow-map test from the light centre with its bias schemes (Cournia
+// ch. 3), shared by `hard` and the final pass of `pvm`:
+//   mode 0 `slope`: receiver-side normal offset plus slope-scaled depth bias,
+//                   both in texels of the map at the receiver's depth;
+//   mode 1 `second_depth`: map of back faces (front faces culled; Wang and
+//                   Molnar 1994), compared without bias;
+//   mode 2 `none`: raw comparison (shows acne; for study).
+
+struct ShadowTest {
+    light_space: LightSpace,
+    // Light centre xyz, light radius.
+    center: vec4<f32>,
+    // normal offset, constant bias, slope bias, max slope (tan theta), all in texels.
+    bias: vec4<f32>,
+    // x: mode; y: method flags (method-specific).
+    mode: vec4<u32>,
+};
+
+// Cosine between the normal and the direction to the light centre.
+fn light_cosine(t: ShadowTest, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let to_light = t.center.xyz - p;
+    // The light centre lies off every surface (scene validation): length > 0.
+    return dot(n, to_light) / max(length(to_light), 1e-30);
+}
+
+// The point whose map texel is read (xyz) and the biased depth compared
+// with the map (w), for a receiver at p with normal n and light cosine cos_theta > 0.
+fn biased_receiver(t: ShadowTest, p: vec3<f32>, n: vec3<f32>, cos_theta: f32) -> vec4<f32> {
+    if (t.mode.x != 0u) {
+        return vec4<f32>(p, light_view_depth(t.light_space, p));
+    }
+    let texel = light_texel_size(t.light_space, light_view_depth(t.light_space, p));
+    let q = p + n * (t.bias.x * texel);
+    // cos_theta > 0, so the tangent is finite; it is clamped at grazing angles.
+    let tan_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0)) / cos_theta;
+    let bias = texel * (t.bias.y + t.bias.z * min(tan_theta, t.bias.w));
+    return vec4<f32>(q, light_view_depth(t.light_space, q) - bias);
+}
+
+// World-unit depth stored in a linear-depth map at the texel over `q`.
+fn map_depth(t: ShadowTest, map: texture_depth_2d, q: vec3<f32>) -> f32 {
+    let size = vec2<i32>(textureDimensions(map));
+    let c = clamp(vec2<i32>(floor(light_map_coords(t.light_space, q))), vec2<i32>(0), size - 1);
+    return textureLoad(map, c, 0) * t.light_space.depth.y;
+}
+
+// Hard visibility of the light centre: 0 or 1.
+fn shadow_test_visibility(t: ShadowTest, map: texture_depth_2d, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let cos_theta = light_cosine(t, p, n);
+    // Centre below the surface's horizon: the surface itself hides it.
+    if (cos_theta <= 0.0) {
+        return 0.0;
+    }
+    let r = biased_receiver(t, p, n, cos_theta);
+    return select(0.0, 1.0, r.w <= map_depth(t, map, r.xyz));
+}
