@@ -1,0 +1,141 @@
+"""Penumbra volume maps (issue 4, Cournia chapter 4)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra.scenes import box, ground_plane, ground_slab, sphere
+
+# Up to larger than every built-in caster (the largest is 2 units) while clear of geometry.
+RADII = [0.0, 1e-4, 0.05, 0.5, 2.2]
+
+
+def long_edge_scene(radius: float = 0.8) -> penumbra.Scene:
+    # A long bar along x at height 2: near x = 0 its top edge at z = +1.5
+    # is the only silhouette edge whose volume covers the receiver there.
+    bar = box((0.0, 2.0, 0.0), (8.0, 0.2, 3.0), object_id=1, name="bar")
+    light = penumbra.SphereLight((0.0, 6.0, 0.0), radius, intensity=60.0)
+    camera = penumbra.Camera(eye=(0.0, 5.0, 5.5), target=(0.0, 0.0, 2.0), fov_y=30, width=160, height=160)
+    return penumbra.Scene([ground_slab(), bar], light, camera)
+
+
+def disk_cut_visible_fraction(p: np.ndarray, h0: np.ndarray, h1: np.ndarray, light: np.ndarray, radius: float, occluder: np.ndarray) -> np.ndarray:
+    """The exact fraction of a disk of the light's radius, centred on the light
+    and perpendicular to the plane through the edge h0-h1 and p, that lies on
+    the side of that plane away from the occluder (Cournia Fig. 4.4-4.5)."""
+    n = np.cross(h1 - h0, p - h0)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    towards_occluder = np.sign(((occluder - h0) * n).sum(-1))
+    u = np.clip(((light - h0) * n).sum(-1) * towards_occluder / radius, -1, 1)
+    # Area of the segment beyond the chord at signed distance u (in radii) from the centre.
+    return (np.arccos(u) - u * np.sqrt(1 - u * u)) / np.pi
+
+
+@pytest.mark.parametrize("falloff", [False, True])
+def test_visibility_is_the_disk_cut_fraction_across_one_edge(renderer: penumbra.Renderer, falloff: bool) -> None:
+    scene = long_edge_scene()
+    result = renderer.render(scene, "pvm", falloff=falloff, intermediates=True)
+    h0, h1 = np.array([-4.0, 2.1, 1.5]), np.array([4.0, 2.1, 1.5])
+    # The middle columns, across the penumbra of the +z edge on the ground.
+    columns = slice(70, 90)
+    # On the +z half, where only the +z edge's volume reaches the ground.
+    inside = (result["pvm_in_volume"][:, columns] > 0) & (result.object_id[:, columns] == 0) & (result.position[:, columns, 2] > 0.0)
+    p = result.position[:, columns][inside].astype(np.float64)
+    assert len(p) > 200, "the line crosses the penumbra"
+    # The edge maps hold the bar's top +z edge where its volume is (light space).
+    edges = result["pvm_edge0"][result["pvm_volume_depth"] < 0.999 * result["pvm_volume_depth"].max()]
+    assert np.isclose(edges[:, 1:], [2.1, 1.5], atol=1e-5).all(axis=1).any()
+    k = disk_cut_visible_fraction(p, h0, h1, scene.light.center.astype(float), scene.light.radius, np.array([0.0, 2.0, 0.0]))
+    expected = 3 * k**2 - 2 * k**3 if falloff else k
+    got = result.visibility[:, columns][inside]
+    assert k.min() < 0.05 and k.max() > 0.95, "the line spans the whole penumbra"
+    np.testing.assert_allclose(got, expected, atol=2e-4)
+
+
+def test_pvm_beats_hard_against_ground_truth_on_every_builtin_scene(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
+    pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
+    from penumbra import metrics
+
+    cache = tmp_path_factory.mktemp("gt")
+    for name in penumbra.scenes.names():
+        scene = penumbra.scenes.get(name, width=96, height=96)
+        gt = pm.ground_truth(scene, spp=256, cache_dir=cache)
+        hard = metrics.compare(renderer.render(scene, "hard"), gt)
+        pvm = metrics.compare(renderer.render(scene, "pvm"), gt)
+        # Measured at 128x128: PVM's penumbra RMSE is 0.30-0.55 of hard's.
+        assert pvm["visibility_rmse_penumbra"] < 0.65 * hard["visibility_rmse_penumbra"], (name, pvm, hard)
+        assert pvm["visibility_rmse"] < hard["visibility_rmse"], name
+
+
+@pytest.mark.parametrize("name", penumbra.scenes.names())
+def test_no_nan_or_inf_from_radius_zero_to_larger_than_the_casters(renderer: penumbra.Renderer, name: str) -> None:
+    for radius in RADII:
+        scene = penumbra.scenes.get(name, width=64, height=64, light_radius=radius)
+        result = renderer.render(scene, "pvm", intermediates=True)
+        for key, image in result.images.items():
+            assert np.isfinite(image).all(), (radius, key)
+        assert result.visibility.min() >= 0 and result.visibility.max() <= 1
+        if radius == 0:
+            # A point light has no penumbra: PVM is the shadow-map test, no volumes.
+            assert result.stats["penumbra_volumes"] == 0 and result.stats["pixels_in_volume"] == 0
+            np.testing.assert_array_equal(result.visibility, renderer.render(scene, "hard").visibility)
+        else:
+            assert result.stats["penumbra_volumes"] == 2 * (result.stats["silhouette_edges"] - result.stats["light_parallel_edges"])
+
+
+def test_penumbra_widens_with_the_light_radius(renderer: penumbra.Renderer) -> None:
+    counts = []
+    for radius in (0.1, 0.4, 1.2):
+        result = renderer.render(penumbra.scenes.get("cube_on_plane", width=96, height=96, light_radius=radius), "pvm")
+        counts.append(int(((result.visibility > 0.02) & (result.visibility < 0.98) & (result.object_id == 0)).sum()))
+    assert counts[0] < counts[1] < counts[2], counts
+
+
+def test_stats_intermediates_and_caches(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get("overlapping_casters", width=64, height=64)
+    first = renderer.render(scene, "pvm", intermediates=True, map_size=512)
+    again = renderer.render(scene, "pvm", map_size=512)
+    for key in ("pvm_volume_depth", "pvm_edge0", "pvm_edge1", "pvm_in_volume", "shadow_map"):
+        assert key in first.images
+    assert first.images["pvm_edge0"].shape == (512, 512, 3)
+    assert first.stats["pixels_in_volume"] == int(first["pvm_in_volume"].sum()) > 0
+    assert again.stats["silhouette_cache_hits"] == len(scene.meshes)
+    np.testing.assert_array_equal(first.visibility, again.visibility)
+    assert list(first.timings) == ["gbuffer", "shadow_map", "penumbra_volumes", "visibility", "shading", "readback"]
+    moved = scene.with_light(penumbra.SphereLight(scene.light.center + 0.1, scene.light.radius, intensity=scene.light.intensity))
+    assert renderer.render(moved, "pvm").stats["silhouette_cache_hits"] == 0
+
+
+def test_open_meshes_are_refused_unless_boundary_edges_are_silhouettes(renderer: penumbra.Renderer) -> None:
+    base = penumbra.scenes.get(width=48, height=48)
+    scene = penumbra.Scene([ground_plane(), base.meshes[1]], base.light, base.camera)
+    with pytest.raises(penumbra.MeshError, match=r"mesh 'ground'.*4 boundary edges.*open_edges='silhouette'"):
+        renderer.render(scene, "pvm")
+    result = renderer.render(scene, "pvm", open_edges="silhouette")
+    assert np.isfinite(result.visibility).all()
+    # The open plane's four rim edges stand in for the closed slab's four top-rim
+    # silhouette edges: the same count, and the same visibility on the ground's top.
+    closed = renderer.render(penumbra.Scene([ground_slab(), base.meshes[1]], base.light, base.camera), "pvm")
+    assert result.stats["silhouette_edges"] == closed.stats["silhouette_edges"]
+    top = (result.object_id == 0) & (closed.object_id == 0) & (result.normal[..., 1] > 0.99) & (closed.normal[..., 1] > 0.99)
+    assert top.sum() > 500
+    np.testing.assert_allclose(result.visibility[top], closed.visibility[top], atol=1e-4)
+
+
+def test_non_manifold_casters_are_refused_with_the_edge_count(renderer: penumbra.Renderer) -> None:
+    base = penumbra.scenes.get(width=32, height=32)
+    bar = box((0.0, 2.0, 0.0), (1.0, 0.2, 1.0), name="finned")
+    fin = penumbra.Mesh(np.vstack([bar.vertices, [[0, 0.1, 0]]]), np.vstack([bar.faces, bar.faces[:1], bar.faces[1:2]]), transform=bar.transform, name="finned")
+    with pytest.raises(penumbra.MeshError, match=r"mesh 'finned'.*not a 2-manifold: \d+ edges"):
+        renderer.render(penumbra.Scene([ground_slab(), fin], base.light, base.camera), "pvm", open_edges="silhouette")
+
+
+def test_pvm_parameters_are_checked(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get(width=16, height=16)
+    with pytest.raises(penumbra.ParameterError, match="falloff.*bool"):
+        renderer.render(scene, "pvm", falloff=1)
+    with pytest.raises(penumbra.ParameterError, match="open_edges"):
+        renderer.render(scene, "pvm", open_edges="ignore")
+    assert renderer.render(scene, "pvm").params["falloff"] is True
