@@ -182,11 +182,14 @@ fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3) -> DVec3 {
     let mut dir = if line.length() < 1e-9 { (v - d).normalize_or_zero() } else { line.normalize() };
     // Cournia negates v^ when v1 lies in the negative half-space of (v0, v2, l);
     // that picks, of the two directions of the intersection line, the one that
-    // leaves the light. We test for that directly, which holds for either loop
-    // orientation.
-    if dir.dot(v - l) < 0.0 {
+    // continues the rays from the displaced light position d through v. We
+    // test for that directly, which holds for either loop orientation (and,
+    // unlike a test against the light centre, for lights large against their
+    // distance).
+    if dir.dot(v - d) < 0.0 {
         dir = -dir;
     }
+    let _ = l;
     dir
 }
 
