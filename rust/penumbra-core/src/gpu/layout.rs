@@ -153,6 +153,17 @@ pub fn create_texture(
     })
 }
 
+/// Depth test `Less` with writes: the first surface along each ray wins.
+pub fn nearest_depth(format: wgpu::TextureFormat) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: Default::default(),
+        bias: Default::default(),
+    })
+}
+
 pub fn view(texture: &wgpu::Texture) -> wgpu::TextureView {
     texture.create_view(&wgpu::TextureViewDescriptor::default())
 }

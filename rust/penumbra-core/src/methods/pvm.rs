@@ -303,13 +303,7 @@ impl PenumbraVolumeMaps {
             vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers: &buffers },
             // Both sides of every quadrilateral: the first-depth volume, whichever way it faces.
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: crate::passes::shadow_map::FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
+            depth_stencil: layout::nearest_depth(crate::passes::shadow_map::FORMAT),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,

@@ -76,13 +76,7 @@ impl GBufferPass {
                 cull_mode: None,
                 ..Default::default()
             },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
+            depth_stencil: layout::nearest_depth(DEPTH_FORMAT),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,

@@ -49,13 +49,7 @@ impl ShadowMapPass {
                     buffers: &buffers,
                 },
                 primitive: wgpu::PrimitiveState { cull_mode, ..Default::default() },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
+                depth_stencil: layout::nearest_depth(FORMAT),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
