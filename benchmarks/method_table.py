@@ -23,6 +23,7 @@ CONFIGS: list[tuple[str, dict[str, Any]]] = [
     ("hard", {}),
     ("pvm", {}),
     ("pvm", {"falloff": False}),
+    ("reference", {"n_samples": 256}),
 ]
 
 

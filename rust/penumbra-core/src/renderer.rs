@@ -13,6 +13,7 @@ use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
 use crate::light_frustum::LightFrustum;
 use crate::methods::hard::HardShadow;
 use crate::methods::pvm::PenumbraVolumeMaps;
+use crate::methods::reference::ReferenceShadows;
 use crate::methods::{MethodConfig, ParamValue};
 use crate::passes::gbuffer::{GBuffer, GBufferPass};
 use crate::passes::shading::{ShadingPass, RADIANCE_FORMAT};
@@ -94,6 +95,7 @@ pub struct Renderer {
     shading: ShadingPass,
     hard: HardShadow,
     pvm: PenumbraVolumeMaps,
+    reference: ReferenceShadows,
 }
 
 impl Renderer {
@@ -102,16 +104,17 @@ impl Renderer {
     pub fn new(use_timestamps: bool) -> Result<Self> {
         let ctx = GpuContext::new()?;
         let device = &ctx.device;
-        let (gbuffer, shadow_map, shading, hard, pvm) = ctx.scoped(|| {
+        let (gbuffer, shadow_map, shading, hard, pvm, reference) = ctx.scoped(|| {
             Ok((
                 GBufferPass::new(device),
                 ShadowMapPass::new(device),
                 ShadingPass::new(device),
                 HardShadow::new(device),
                 PenumbraVolumeMaps::new(device),
+                ReferenceShadows::new(device),
             ))
         })?;
-        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, pvm })
+        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, pvm, reference })
     }
 
     pub fn adapter(&self) -> &AdapterSummary {
@@ -204,15 +207,18 @@ impl Renderer {
             ("degenerate_triangles".to_owned(), prepared.degenerate_triangles as i64),
         ]);
         let mut intermediates: Vec<Intermediate<'_>> = Vec::new();
-        // Pass 1 of every method here: the shadow map from the light centre.
+        // Pass 1 of `hard` and `pvm`: the shadow map from the light centre.
         let settings = method.shadow_map();
-        let shadow_map = ShadowMapPass::create_map(device, settings.map_size);
-        profiler.pass("shadow_map", |encoder, ts| {
-            self.shadow_map.record(device, encoder, &shadow_map, frustum, settings.bias.culling(), &vertices, vertex_count, ts)
-        })?;
-        stats.insert("shadow_maps_rendered".into(), 1);
+        let centre_map = !matches!(method, MethodConfig::Reference(_));
+        let shadow_map = ShadowMapPass::create_map(device, if centre_map { settings.map_size } else { 1 });
+        if centre_map {
+            profiler.pass("shadow_map", |encoder, ts| {
+                self.shadow_map.record(device, encoder, &shadow_map, frustum, settings.bias.culling(), &vertices, vertex_count, ts)
+            })?;
+            stats.insert("shadow_maps_rendered".into(), 1);
+            intermediates.push(Intermediate::depth("shadow_map", &shadow_map));
+        }
         stats.insert("map_size".into(), settings.map_size as i64);
-        intermediates.push(Intermediate::depth("shadow_map", &shadow_map));
         let light = (scene.light.center, scene.light.radius);
         let pvm_frame;
         let mut counter = None;
@@ -223,6 +229,18 @@ impl Renderer {
                         device, encoder, params, &gbuffer, &shadow_map, frustum, scene.light.center, &visibility, ts,
                     )
                 })?;
+            }
+            MethodConfig::Reference(params) => {
+                let l = glam::Vec3::from(light.0).as_dvec3();
+                let mut used = Ok(0);
+                profiler.pass("light_samples", |encoder, ts| {
+                    used = self.reference.record(
+                        device, encoder, &self.shadow_map, params, prepared, (l, light.1 as f64), (&vertices, vertex_count), &gbuffer, &visibility, ts,
+                    );
+                })?;
+                let used = used?;
+                stats.insert("light_samples".into(), used as i64);
+                stats.insert("shadow_maps_rendered".into(), used as i64);
             }
             MethodConfig::Pvm(params) => {
                 let l = glam::Vec3::from(light.0).as_dvec3();

@@ -27,6 +27,10 @@ pub fn hard() -> String {
     compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/hard.wgsl")])
 }
 
+pub fn reference() -> String {
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/reference.wgsl")])
+}
+
 pub fn pvm_volumes() -> String {
     compose(&[include_str!("methods/pvm_volumes.wgsl")])
 }
@@ -45,6 +49,11 @@ pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
             "hard",
             hard(),
             &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/hard.wgsl"],
+        ),
+        (
+            "reference",
+            reference(),
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/reference.wgsl"],
         ),
         ("pvm_volumes", pvm_volumes(), &["methods/pvm_volumes.wgsl"]),
         (

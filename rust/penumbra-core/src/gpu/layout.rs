@@ -105,11 +105,22 @@ pub fn compute_pipeline(
     layout: &wgpu::BindGroupLayout,
 ) -> wgpu::ComputePipeline {
     let module = crate::shaders::module(device, label, source);
+    compute_pipeline_entry(device, label, &module, layout, "main")
+}
+
+/// A compute pipeline of one entry point of `module`, over one bind group.
+pub fn compute_pipeline_entry(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::BindGroupLayout,
+    entry_point: &str,
+) -> wgpu::ComputePipeline {
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(label),
         layout: Some(&pipeline_layout(device, label, layout)),
-        module: &module,
-        entry_point: Some("main"),
+        module,
+        entry_point: Some(entry_point),
         compilation_options: Default::default(),
         cache: None,
     })
@@ -125,10 +136,19 @@ pub fn dispatch_per_pixel(
     (width, height): (u32, u32),
     timestamps: Option<crate::gpu::PassTimestamps<'_>>,
 ) {
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(label),
-        timestamp_writes: timestamps.map(|t| t.compute()),
-    });
+    dispatch_per_pixel_writes(encoder, label, pipeline, bind_group, (width, height), timestamps.map(|t| t.compute()));
+}
+
+/// [`dispatch_per_pixel`] with explicit timestamp writes (for parts of a named pass).
+pub fn dispatch_per_pixel_writes(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    bind_group: &wgpu::BindGroup,
+    (width, height): (u32, u32),
+    timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes });
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, bind_group, &[]);
     pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);

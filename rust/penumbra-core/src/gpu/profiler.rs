@@ -50,6 +50,24 @@ impl<'q> PassTimestamps<'q> {
             end_of_pass_write_index: Some(self.begin + 1),
         }
     }
+
+    /// For a named pass made of several wgpu passes: the begin timestamp only
+    /// (on the first), or the end only (on the last); None for the others.
+    pub fn render_part(self, first: bool, last: bool) -> Option<wgpu::RenderPassTimestampWrites<'q>> {
+        (first || last).then_some(wgpu::RenderPassTimestampWrites {
+            query_set: self.set,
+            beginning_of_pass_write_index: first.then_some(self.begin),
+            end_of_pass_write_index: last.then_some(self.begin + 1),
+        })
+    }
+
+    pub fn compute_part(self, first: bool, last: bool) -> Option<wgpu::ComputePassTimestampWrites<'q>> {
+        (first || last).then_some(wgpu::ComputePassTimestampWrites {
+            query_set: self.set,
+            beginning_of_pass_write_index: first.then_some(self.begin),
+            end_of_pass_write_index: last.then_some(self.begin + 1),
+        })
+    }
 }
 
 /// Records named passes. With timestamps, all passes share one encoder and
@@ -98,7 +116,7 @@ impl<'c> Profiler<'c> {
     }
 
     /// Records one named pass. `record` gets the encoder and, with timestamps,
-    /// where its (single) wgpu pass writes them.
+    /// where its wgpu pass (or first and last of several) writes them.
     pub fn pass(
         &mut self,
         name: &str,

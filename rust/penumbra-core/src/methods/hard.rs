@@ -116,6 +116,14 @@ pub struct ShadowTestUniform {
     mode: [u32; 4],
 }
 
+impl ShadowTestUniform {
+    /// The method-specific fourth component of `center` (PVM: the light's radius;
+    /// `reference`: the sample's weight).
+    pub fn set_center_w(&mut self, w: f32) {
+        self.center[3] = w;
+    }
+}
+
 pub struct HardShadow {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,

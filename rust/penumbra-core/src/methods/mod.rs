@@ -7,9 +7,11 @@ use crate::error::{Error, Result};
 
 pub mod hard;
 pub mod pvm;
+pub mod reference;
 
 pub use hard::{BiasMode, HardParams, ShadowMapSettings};
 pub use pvm::PvmParams;
+pub use reference::ReferenceParams;
 
 /// A parameter value as it arrives from Python or the CLI.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,7 +38,7 @@ pub const METHODS: &[(&str, bool)] = &[
     ("hard", true),
     ("pcf", false),
     ("pcss", false),
-    ("reference", false),
+    ("reference", true),
     ("adaptive", false),
     ("pvm", true),
     ("pvmf", false),
@@ -49,6 +51,7 @@ pub const METHODS: &[(&str, bool)] = &[
 pub enum MethodConfig {
     Hard(HardParams),
     Pvm(PvmParams),
+    Reference(ReferenceParams),
 }
 
 impl MethodConfig {
@@ -57,6 +60,7 @@ impl MethodConfig {
         let config = match method {
             "hard" => MethodConfig::Hard(HardParams::read(&mut reader)?),
             "pvm" => MethodConfig::Pvm(PvmParams::read(&mut reader)?),
+            "reference" => MethodConfig::Reference(ReferenceParams::read(&mut reader)?),
             _ => {
                 let implemented: Vec<&str> = METHODS.iter().filter(|m| m.1).map(|m| m.0).collect();
                 return Err(Error::InvalidParameter(
@@ -76,6 +80,7 @@ impl MethodConfig {
         match self {
             MethodConfig::Hard(_) => "hard",
             MethodConfig::Pvm(_) => "pvm",
+            MethodConfig::Reference(_) => "reference",
         }
     }
 
@@ -84,14 +89,17 @@ impl MethodConfig {
         match self {
             MethodConfig::Hard(p) => p.effective(),
             MethodConfig::Pvm(p) => p.effective(),
+            MethodConfig::Reference(p) => p.effective(),
         }
     }
 
-    /// The shadow map this method renders from the light centre.
+    /// The shadow maps this method renders (from the light centre, or from
+    /// each light sample for `reference`).
     pub fn shadow_map(&self) -> &ShadowMapSettings {
         match self {
             MethodConfig::Hard(p) => p,
             MethodConfig::Pvm(p) => &p.shadow,
+            MethodConfig::Reference(p) => &p.shadow,
         }
     }
 }

@@ -92,6 +92,22 @@ impl ShadowMapPass {
         vertex_count: u32,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
+        self.record_writes(device, encoder, map, frustum, culling, vertices, vertex_count, timestamps.map(|t| t.render()));
+    }
+
+    /// [`Self::record`] with explicit timestamp writes (for parts of a named pass).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_writes(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        map: &wgpu::Texture,
+        frustum: &LightFrustum,
+        culling: Culling,
+        vertices: &wgpu::Buffer,
+        vertex_count: u32,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("shadow_map::uniforms"),
             contents: bytemuck::bytes_of(&shadow_uniforms(frustum)),
@@ -107,7 +123,7 @@ impl ShadowMapPass {
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
-            timestamp_writes: timestamps.map(|t| t.render()),
+            timestamp_writes,
             occlusion_query_set: None,
             multiview_mask: None,
         });
