@@ -62,6 +62,20 @@ pub fn storage_buffer(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+/// A read-write storage buffer for compute shaders (accumulators, counters).
+pub fn storage_buffer_rw(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: false },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
 pub fn bind_group_layout(
     device: &wgpu::Device,
     label: &str,

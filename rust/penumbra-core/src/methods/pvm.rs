@@ -327,16 +327,7 @@ impl PenumbraVolumeMaps {
                 layout::uniform(6),
                 layout::storage_texture(7, VISIBILITY_FORMAT),
                 layout::storage_texture(8, VISIBILITY_FORMAT),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 9,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                layout::storage_buffer_rw(9),
             ],
         );
         let visibility_pipeline = layout::compute_pipeline(device, "pvm::visibility_pipeline", crate::shaders::pvm(), &visibility_layout);

@@ -120,16 +120,7 @@ impl ReferenceShadows {
                 layout::float_texture(1),
                 layout::depth_texture(2),
                 layout::uniform(3),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 4,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                layout::storage_buffer_rw(4),
                 layout::storage_texture(5, VISIBILITY_FORMAT),
             ],
         );
