@@ -11,7 +11,7 @@ import penumbra
 from penumbra.raycast import outline_band, point_light_visibility
 from penumbra.scenes import ground_plane, sphere
 
-from conftest import plane_hits
+from penumbra.analytic import plane_hits
 
 
 def test_unshadowed_plane_radiance_matches_the_point_form(renderer: penumbra.Renderer) -> None:

@@ -18,7 +18,7 @@ from penumbra import metrics
 from penumbra.raycast import outline_band
 from penumbra.scenes import box, ground_plane, sphere
 
-from conftest import plane_hits
+from penumbra.analytic import cap_overlap, plane_hits
 
 mitsuba = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed")
 from penumbra import mitsuba as pm  # noqa: E402
@@ -94,22 +94,6 @@ def test_hard_agrees_with_a_tiny_light_except_on_shadow_edges(renderer: penumbra
         # Radiance too, off silhouettes and shadow edges, up to the ground truth's noise.
         keep = ~metrics.silhouette_band(result.object_id) & ~outline_band(lit)
         assert metrics.rmse(result.radiance, gt.radiance, keep) / metrics.lit_mean(gt.radiance, gt.visibility) < 0.01
-
-
-def cap_overlap(a1: np.ndarray, a2: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """Solid angle shared by two cones of half-angles a1, a2 whose axes are g
-    apart (spherical-cap intersection; checked against sampling below)."""
-    c1, c2, cg = np.cos(a1), np.cos(a2), np.cos(g)
-    s1, s2, sg = np.sin(a1), np.sin(a2), np.sin(np.maximum(g, 1e-12))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        lens = (
-            2 * np.pi
-            - 2 * np.arccos(np.clip((cg - c1 * c2) / (s1 * s2), -1, 1))
-            - 2 * c1 * np.arccos(np.clip((c2 - cg * c1) / (sg * s1), -1, 1))
-            - 2 * c2 * np.arccos(np.clip((c1 - cg * c2) / (sg * s2), -1, 1))
-        )
-    inside = 2 * np.pi * (1 - np.cos(np.minimum(a1, a2)))
-    return np.where(g >= a1 + a2, 0.0, np.where(g <= np.abs(a1 - a2), inside, lens))
 
 
 def test_cap_overlap_formula_matches_sampling() -> None:

@@ -1,0 +1,110 @@
+"""The numbers the README and the tests' tolerances rest on, printed.
+
+1. Mitsuba's unshadowed radiance against Penumbra's (relative RMSE, off silhouettes).
+2. The visibility estimator against the closed form of a sphere occluder
+   (RMSE over the penumbra, beside the estimator's own seed-to-seed noise).
+3. Mitsuba's radiance from small sphere lights, exported as spheres, against
+   Penumbra's exact irradiance (why small lights are exported as points).
+4. Per-pass timings with GPU timestamps and with CPU clocks, after a warm-up.
+5. PVM with a light twice the occluder's radius: ground pixels off by > 0.5.
+
+The scenes are those of tests/test_ground_truth.py and tests/test_pvm.py.
+
+    python benchmarks/checks.py
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+import penumbra
+from penumbra import metrics
+from penumbra import mitsuba as pm
+from penumbra.analytic import cap_overlap, plane_hits
+from penumbra.scenes import ground_plane, sphere
+
+
+def unshadowed_radiance(renderer: penumbra.Renderer) -> None:
+    light = penumbra.SphereLight((0.7, 3.0, -0.4), 0.5, radiance=(40.0, 25.0, 10.0))
+    camera = penumbra.Camera(eye=(1.0, 4.0, 6.0), target=(0.0, 0.0, -0.5), fov_y=50, width=80, height=60)
+    plane = ground_plane()
+    scene = penumbra.Scene([penumbra.Mesh(plane.vertices, plane.faces, albedo=(0.8, 0.6, 0.4))], light, camera)
+    result = renderer.render(scene)
+    gt = pm.ground_truth(scene, spp=64, kinds=["radiance"], cache=False)
+    keep = ~metrics.silhouette_band(result.object_id)
+    rel = metrics.rmse(result.radiance, gt.radiance, keep) / metrics.lit_mean(gt.radiance, np.ones(result.visibility.shape))
+    print(f"1. unshadowed radiance, Mitsuba against Penumbra: relative RMSE {100 * rel:.3f}%")
+
+
+def estimator_against_closed_form() -> None:
+    center, radius = np.array([0.2, 1.5, 0.0]), 0.8
+    light = penumbra.SphereLight((0.0, 4.5, 0.3), 0.7, intensity=30.0)
+    camera = penumbra.Camera(eye=(0.0, 6.0, 4.0), target=(0.0, 0.0, 0.0), fov_y=50, width=96, height=96)
+    scene = penumbra.Scene([ground_plane(), sphere(tuple(center), radius, subdivisions=6)], light, camera)
+    gt = pm.ground_truth(scene, spp=256, seed=3, noise_seed=4, kinds=["visibility"], cache=False)
+    p = plane_hits(camera)
+    on_plane = np.isfinite(p[..., 0]) & (np.abs(p[..., 0]) < 4.9) & (np.abs(p[..., 2]) < 4.9)
+    to_light, to_occluder = np.asarray(light.center, float) - p, center - p
+    dl, do = np.linalg.norm(to_light, axis=-1), np.linalg.norm(to_occluder, axis=-1)
+    a_light, a_occ = np.arcsin(light.radius / dl), np.arcsin(np.clip(radius / do, 0, 1))
+    g = np.arccos(np.clip((to_light * to_occluder).sum(-1) / (dl * do), -1, 1))
+    closed = 1 - cap_overlap(a_light, a_occ, g) / (2 * np.pi * (1 - np.cos(a_light)))
+    seen = on_plane & (np.abs(gt.images["hit_distance"] - np.linalg.norm(p - np.asarray(camera.eye), axis=-1)) < 1e-3)
+    region = seen & metrics.penumbra_region(closed)
+    error = metrics.rmse(gt.visibility, closed, region)
+    assert gt.second is not None
+    noise = metrics.rmse(gt.visibility, gt.second.visibility, region) / math.sqrt(2)
+    print(f"2. visibility estimator against the cap-overlap closed form: RMSE {error:.5f}, its noise {noise:.5f} ({region.sum()} penumbra pixels)")
+
+
+def small_sphere_lights(renderer: penumbra.Renderer) -> None:
+    saved = pm.POINT_LIGHT_RATIO
+    pm.POINT_LIGHT_RATIO = 0.0  # export every light as a sphere
+    try:
+        cells = []
+        for r in (0.5, 0.05, 0.01, 0.003, 0.001):
+            scene = penumbra.scenes.get(width=48, height=48, light_radius=r)
+            result = renderer.render(scene)
+            gt = pm.ground_truth(scene, spp=64, cache=False)
+            lit = (gt.visibility > 0.999) & (result.visibility == 1) & (result.object_id == 0)
+            ratio = float(np.median(gt.radiance[lit][:, 0] / result.radiance[lit][:, 0]))
+            cells.append(f"r={r}: {ratio:.4f}")
+    finally:
+        pm.POINT_LIGHT_RATIO = saved
+    print("3. Mitsuba sphere light / exact irradiance, lit ground about 5 units away: " + ", ".join(cells))
+
+
+def timings() -> None:
+    scene = penumbra.scenes.get(width=512, height=512)
+    for timing in ("auto", "cpu"):
+        r = penumbra.Renderer(timing=timing)
+        for _ in range(3):
+            result = r.render(scene)
+        passes = ", ".join(f"{k} {v:.2f}" for k, v in result.timings.items())
+        print(f"4. timing={timing} ({result.timing_source}), ms: {passes}")
+
+
+def pvm_large_light(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get("sphere_on_plane", width=320, height=320, light_radius=2.0)
+    result = renderer.render(scene, "pvm")
+    gt = pm.ground_truth(scene, spp=1024, kinds=["visibility"])
+    wrong = (np.abs(result.visibility - gt.visibility) > 0.5) & (result.object_id == 0)
+    where = np.argwhere(wrong)
+    first = result.position[tuple(where[0])] if len(where) else None
+    print(f"5. pvm, light radius 2 over a sphere of radius 1: {wrong.sum()} ground pixels off by > 0.5, e.g. at {first}")
+
+
+def main() -> None:
+    renderer = penumbra.Renderer()
+    print(f"adapter {renderer.adapter_info['name']}; Mitsuba {pm.variant()}")
+    unshadowed_radiance(renderer)
+    estimator_against_closed_form()
+    small_sphere_lights(renderer)
+    timings()
+    pvm_large_light(renderer)
+
+
+if __name__ == "__main__":
+    main()
