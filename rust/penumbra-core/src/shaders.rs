@@ -5,6 +5,7 @@
 pub const COMMON: &str = include_str!("shaders/common.wgsl");
 pub const LIGHT_SPACE: &str = include_str!("shaders/light_space.wgsl");
 pub const SHADOW_TEST: &str = include_str!("shaders/shadow_test.wgsl");
+pub const PCF: &str = include_str!("shaders/pcf.wgsl");
 
 /// Concatenates snippets into one module source.
 pub fn compose(parts: &[&str]) -> String {
@@ -54,6 +55,11 @@ pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
             "reference",
             reference(),
             &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/reference.wgsl"],
+        ),
+        (
+            "pcf_taps",
+            compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF]),
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "shaders/pcf.wgsl"],
         ),
         ("pvm_volumes", pvm_volumes(), &["methods/pvm_volumes.wgsl"]),
         (

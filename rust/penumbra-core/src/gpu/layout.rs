@@ -36,6 +36,34 @@ pub fn storage_texture(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindG
     }
 }
 
+/// A comparison sampler (`sampler_comparison`), for percentage-closer taps.
+pub fn comparison_sampler(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+        count: None,
+    }
+}
+
+/// A shadow-map comparison sampler passing where the reference depth is at
+/// most the stored one; `linear` gives the hardware's 2x2 bilinear PCF
+/// (comparison filtering is core WebGPU, so every adapter has it), otherwise
+/// the nearest texel decides. Clamped at the map's edges.
+pub fn create_comparison_sampler(device: &wgpu::Device, linear: bool) -> wgpu::Sampler {
+    let filter = if linear { wgpu::FilterMode::Linear } else { wgpu::FilterMode::Nearest };
+    device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some(if linear { "layout::bilinear_comparison" } else { "layout::nearest_comparison" }),
+        address_mode_u: wgpu::AddressMode::ClampToEdge,
+        address_mode_v: wgpu::AddressMode::ClampToEdge,
+        address_mode_w: wgpu::AddressMode::ClampToEdge,
+        mag_filter: filter,
+        min_filter: filter,
+        compare: Some(wgpu::CompareFunction::LessEqual),
+        ..Default::default()
+    })
+}
+
 pub fn uniform(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,

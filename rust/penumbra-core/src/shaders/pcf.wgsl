@@ -1,0 +1,116 @@
+// Shared by the filtering methods (`pcf`, `pcss`, `pvmf`): shadow-map taps
+// away from the receiver's own texel (percentage-closer filtering, Reeves et
+// al. 1987; Cournia ch. 3 and 5.2).
+//
+// Each tap compares the map against the depth of the receiver's tangent plane
+// along that tap's light ray ("receiver-plane depth"), not against the
+// receiver's own depth, so that a wide kernel over a receiver sloped towards
+// the light does not shadow itself. Taps go through a comparison sampler:
+// with linear filtering that is the hardware's 2x2 bilinear PCF.
+// Requires common.wgsl, light_space.wgsl and shadow_test.wgsl.
+
+struct Receiver {
+    // A point on the receiver's plane (the biased lookup point) and its unit normal.
+    origin: vec3<f32>,
+    normal: vec3<f32>,
+    // Light depth of `origin` and its map coordinates in texels.
+    depth: f32,
+    coords: vec2<f32>,
+    // Depth bias subtracted from every tap, world units.
+    bias: f32,
+    // World size of one map texel at `depth`.
+    texel: f32,
+};
+
+// The receiver at p (normal n, light cosine cos_theta > 0) for the bias mode
+// of `t`: mode 0 (`slope`) offsets the plane along n by `normal_offset`
+// texels and subtracts `constant_bias` texels (the plane itself replaces the
+// slope term); the other modes compare the plane unbiased.
+fn pcf_receiver(t: ShadowTest, p: vec3<f32>, n: vec3<f32>) -> Receiver {
+    var r: Receiver;
+    r.normal = n;
+    r.texel = light_texel_size(t.light_space, light_view_depth(t.light_space, p));
+    r.origin = p;
+    r.bias = 0.0;
+    if (t.mode.x == 0u) {
+        r.origin = p + n * (t.bias.x * r.texel);
+        r.bias = t.bias.y * r.texel;
+    }
+    r.depth = light_view_depth(t.light_space, r.origin);
+    r.coords = light_map_coords(t.light_space, r.origin);
+    return r;
+}
+
+// World direction of the light ray through map coordinates `c` (texels),
+// scaled so that its light-view depth is 1.
+fn light_ray(ls: LightSpace, c: vec2<f32>) -> vec3<f32> {
+    let uv = c / ls.depth.z;
+    let x = ls.window.x + uv.x * (ls.window.y - ls.window.x);
+    let y = ls.window.z + (1.0 - uv.y) * (ls.window.w - ls.window.z);
+    // The view matrix is a rigid transform: its 3x3 part is a rotation, whose
+    // inverse is its transpose.
+    let rot = mat3x3<f32>(ls.view[0].xyz, ls.view[1].xyz, ls.view[2].xyz);
+    return transpose(rot) * vec3<f32>(x, y, -1.0);
+}
+
+// Light depth at which the ray through map coordinates `c` meets the
+// receiver's plane, clamped to within `t.bias.w` (the largest slope the bias
+// schemes use) times the lateral distance from the receiver.
+fn plane_depth(t: ShadowTest, r: Receiver, c: vec2<f32>) -> f32 {
+    let lateral = length(c - r.coords) * r.texel;
+    let limit = t.bias.w * lateral;
+    let d = light_ray(t.light_space, c);
+    // The light is on the normal's side of the plane (cos_theta > 0), so the
+    // ray meets the plane ahead of it exactly where dot(n, d) < 0; elsewhere
+    // (beyond the plane's horizon as seen from the light) the plane is taken
+    // as far as the clamp allows.
+    let denom = dot(r.normal, d);
+    if (denom >= -1e-12) {
+        return r.depth + limit;
+    }
+    let depth = dot(r.normal, r.origin - t.center.xyz) / denom;
+    return clamp(depth, r.depth - limit, r.depth + limit);
+}
+
+// One tap: the fraction of the (bilinearly weighted) texels around `c` that
+// do not hide the receiver's plane.
+fn pcf_tap(t: ShadowTest, map: texture_depth_2d, cmp: sampler_comparison, r: Receiver, c: vec2<f32>) -> f32 {
+    let reference = (plane_depth(t, r, c) - r.bias) / t.light_space.depth.y;
+    return textureSampleCompareLevel(map, cmp, c / t.light_space.depth.z, reference);
+}
+
+// PCG hash (O'Neill; the "pcg" of Jarzynski and Olano 2020).
+fn pcg_hash(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// Two uniform numbers in [0, 1) fixed by pixel, seed and tap index.
+fn jitter2(px: vec2<u32>, seed: u32, index: u32) -> vec2<f32> {
+    let h = pcg_hash(px.x ^ pcg_hash(px.y ^ pcg_hash(seed ^ pcg_hash(index))));
+    let h2 = pcg_hash(h);
+    return vec2<f32>(f32(h >> 8u), f32(h2 >> 8u)) / 16777216.0;
+}
+
+// Tap `index` of an n x n grid over [-0.5, 0.5]^2, placed at `jitter` in its cell.
+fn grid_tap(index: u32, n: u32, jitter: vec2<f32>) -> vec2<f32> {
+    let cell = vec2<f32>(f32(index % n), f32(index / n));
+    return (cell + jitter) / f32(n) - 0.5;
+}
+
+// Shirley and Chiu's concentric map from [-0.5, 0.5]^2 to the unit disk: keeps
+// a stratified grid stratified.
+fn square_to_disk(s: vec2<f32>) -> vec2<f32> {
+    let a = 2.0 * s;
+    if (a.x == 0.0 && a.y == 0.0) {
+        return vec2<f32>(0.0);
+    }
+    // The larger of |a.x|, |a.y| is non-zero here, so each division is safe.
+    if (abs(a.x) > abs(a.y)) {
+        let phi = (PI / 4.0) * (a.y / a.x);
+        return a.x * vec2<f32>(cos(phi), sin(phi));
+    }
+    let phi = (PI / 2.0) - (PI / 4.0) * (a.x / a.y);
+    return a.y * vec2<f32>(cos(phi), sin(phi));
+}
