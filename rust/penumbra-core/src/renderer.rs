@@ -14,6 +14,7 @@ use crate::light_frustum::LightFrustum;
 use crate::methods::hard::HardShadow;
 use crate::methods::pvm::PenumbraVolumeMaps;
 use crate::methods::reference::ReferenceShadows;
+use crate::methods::silhouettes::SilhouetteCache;
 use crate::methods::{MethodConfig, ParamValue};
 use crate::passes::gbuffer::{GBuffer, GBufferPass};
 use crate::passes::shading::{ShadingPass, RADIANCE_FORMAT};
@@ -96,6 +97,7 @@ pub struct Renderer {
     hard: HardShadow,
     pvm: PenumbraVolumeMaps,
     reference: ReferenceShadows,
+    silhouettes: SilhouetteCache,
 }
 
 impl Renderer {
@@ -114,7 +116,7 @@ impl Renderer {
                 ReferenceShadows::new(device),
             ))
         })?;
-        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, pvm, reference })
+        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, pvm, reference, silhouettes: SilhouetteCache::default() })
     }
 
     pub fn adapter(&self) -> &AdapterSummary {
@@ -213,7 +215,7 @@ impl Renderer {
         let shadow_map = ShadowMapPass::create_map(device, if centre_map { settings.map_size } else { 1 });
         if centre_map {
             profiler.pass("shadow_map", |encoder, ts| {
-                self.shadow_map.record(device, encoder, &shadow_map, frustum, settings.bias.culling(), &vertices, vertex_count, ts)
+                self.shadow_map.record(device, encoder, &shadow_map, frustum, settings.bias.map_depth(), &vertices, vertex_count, ts)
             })?;
             stats.insert("shadow_maps_rendered".into(), 1);
             intermediates.push(Intermediate::depth("shadow_map", &shadow_map));
@@ -246,7 +248,7 @@ impl Renderer {
                 let l = glam::Vec3::from(light.0).as_dvec3();
                 let mut built = None;
                 profiler.pass("penumbra_volumes", |encoder, ts| {
-                    built = Some(self.pvm.record_volumes(device, encoder, params, prepared, frustum, (l, light.1 as f64), size, ts));
+                    built = Some(self.pvm.record_volumes(device, encoder, params, &self.silhouettes, prepared, frustum, (l, light.1 as f64), size, ts));
                 })?;
                 pvm_frame = built.expect("the pass ran")?;
                 profiler.pass("visibility", |encoder, ts| {

@@ -7,8 +7,9 @@
 //! the texel, so they remove acne at any map size and scene scale while
 //! moving the shadow boundary by about one texel, which is below the visible
 //! light leak of a fixed world-space bias. `second_depth` (Wang and Molnar
-//! 1994, Cournia 5.5) needs no bias but only works for closed casters; `none`
-//! shows the raw acne.
+//! 1994, Cournia 5.5) needs no bias but only works for closed casters;
+//! `midpoint` (Woo 1992) compares against the depth half-way between the
+//! first and second surfaces, also without bias; `none` shows the raw acne.
 
 use std::collections::BTreeMap;
 
@@ -20,30 +21,34 @@ use crate::light_frustum::LightFrustum;
 use crate::methods::{ParamReader, ParamValue};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::shading::VISIBILITY_FORMAT;
-use crate::passes::shadow_map::{Culling, LightSpaceUniform};
+use crate::passes::shadow_map::{LightSpaceUniform, MapDepth};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BiasMode {
     Slope,
     SecondDepth,
+    Midpoint,
     None,
 }
 
 impl BiasMode {
-    const NAMES: [&'static str; 3] = ["slope", "second_depth", "none"];
+    const NAMES: [&'static str; 4] = ["slope", "second_depth", "midpoint", "none"];
 
     pub fn name(self) -> &'static str {
         match self {
             BiasMode::Slope => "slope",
             BiasMode::SecondDepth => "second_depth",
+            BiasMode::Midpoint => "midpoint",
             BiasMode::None => "none",
         }
     }
 
-    pub fn culling(self) -> Culling {
+    /// The surface the shadow map stores for this scheme.
+    pub fn map_depth(self) -> MapDepth {
         match self {
-            BiasMode::SecondDepth => Culling::FrontFaces,
-            _ => Culling::None,
+            BiasMode::SecondDepth => MapDepth::Second,
+            BiasMode::Midpoint => MapDepth::Midpoint,
+            _ => MapDepth::First,
         }
     }
 }
@@ -71,6 +76,7 @@ impl ShadowMapSettings {
             map_size: r.int("map_size", 2048, 16, 16384)? as u32,
             bias: match r.choice("bias", "slope", &BiasMode::NAMES)? {
                 "second_depth" => BiasMode::SecondDepth,
+                "midpoint" => BiasMode::Midpoint,
                 "none" => BiasMode::None,
                 _ => BiasMode::Slope,
             },
@@ -96,6 +102,7 @@ impl ShadowMapSettings {
             BiasMode::Slope => 0,
             BiasMode::SecondDepth => 1,
             BiasMode::None => 2,
+            BiasMode::Midpoint => 3,
         };
         ShadowTestUniform {
             light_space: LightSpaceUniform::new(frustum, self.map_size),

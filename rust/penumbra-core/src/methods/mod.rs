@@ -8,6 +8,7 @@ use crate::error::{Error, Result};
 pub mod hard;
 pub mod pvm;
 pub mod reference;
+pub mod silhouettes;
 
 pub use hard::{BiasMode, HardParams, ShadowMapSettings};
 pub use pvm::PvmParams;

@@ -16,8 +16,6 @@
 //! thin gap where the shadow-map test takes over. `stats` counts such vertices.
 
 use std::collections::{BTreeMap, HashMap};
-use std::hash::{Hash, Hasher};
-use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
 use wgpu::util::DeviceExt;
@@ -29,18 +27,10 @@ use crate::methods::hard::ShadowMapSettings;
 use crate::methods::{ParamReader, ParamValue};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::shading::VISIBILITY_FORMAT;
-use crate::scene::{PreparedMesh, PreparedScene};
-use crate::topology::{Topology, NO_FACE};
+use crate::scene::PreparedScene;
+pub use crate::methods::silhouettes::{silhouette, OpenEdges, SilhouetteCache, SilhouetteEdge};
 
 pub const EDGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum OpenEdges {
-    /// Casters must be closed 2-manifolds (the paper's assumption).
-    Error,
-    /// Boundary edges of open meshes are silhouette edges.
-    Silhouette,
-}
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct PvmParams {
@@ -55,74 +45,16 @@ impl PvmParams {
         Ok(Self {
             shadow: ShadowMapSettings::read(r)?,
             falloff: r.bool("falloff", true)?,
-            open_edges: match r.choice("open_edges", "error", &["error", "silhouette"])? {
-                "silhouette" => OpenEdges::Silhouette,
-                _ => OpenEdges::Error,
-            },
+            open_edges: OpenEdges::parse(r.choice("open_edges", "error", &OpenEdges::NAMES)?),
         })
     }
 
     pub fn effective(&self) -> BTreeMap<String, ParamValue> {
         let mut out = self.shadow.effective();
         out.insert("falloff".into(), ParamValue::Bool(self.falloff));
-        let open = match self.open_edges {
-            OpenEdges::Error => "error",
-            OpenEdges::Silhouette => "silhouette",
-        };
-        out.insert("open_edges".into(), ParamValue::Str(open.into()));
+        out.insert("open_edges".into(), ParamValue::Str(self.open_edges.name().into()));
         out
     }
-}
-
-/// A silhouette edge `a -> b`, oriented so that the hard-shadow plane normal
-/// `(b - a) x (a - l)` points away from the occluder.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SilhouetteEdge {
-    pub a: DVec3,
-    pub b: DVec3,
-    /// Welded vertex indices of a and b.
-    pub ia: u32,
-    pub ib: u32,
-}
-
-/// Silhouette edges of one mesh with respect to the light centre `l` (4.1.1):
-/// edges between a face facing the light and one facing away, plus, when
-/// `boundary` is set, every edge with a single face.
-pub fn silhouette(topology: &Topology, l: DVec3, boundary: bool) -> Vec<SilhouetteEdge> {
-    let facing: Vec<bool> = (0..topology.faces.len() as u32)
-        .map(|f| {
-            let centroid = topology.faces[f as usize].iter().map(|&i| topology.positions[i as usize]).sum::<DVec3>() / 3.0;
-            topology.face_normal(f).dot(l - centroid) > 0.0
-        })
-        .collect();
-    let mut out = Vec::new();
-    for e in &topology.edges {
-        let [f0, f1] = e.faces;
-        let is_boundary = f0 == NO_FACE || f1 == NO_FACE;
-        if is_boundary && !boundary {
-            continue;
-        }
-        if !is_boundary && facing[f0 as usize] == facing[f1 as usize] {
-            continue;
-        }
-        let (mut ia, mut ib) = (e.v[0], e.v[1]);
-        let (mut a, mut b) = (topology.positions[ia as usize], topology.positions[ib as usize]);
-        // Both faces of a silhouette edge lie on the occluder's side of the
-        // plane through the edge and the light; take the first that is off it.
-        let normal = (b - a).cross(a - l);
-        let side = [f0, f1]
-            .iter()
-            .filter(|&&f| f != NO_FACE)
-            .map(|&f| normal.dot(topology.opposite_vertex(f, e) - a))
-            .find(|d| d.abs() > 1e-12 * normal.length() * (b - a).length().max(1e-300))
-            .unwrap_or(0.0);
-        if side > 0.0 {
-            std::mem::swap(&mut a, &mut b);
-            std::mem::swap(&mut ia, &mut ib);
-        }
-        out.push(SilhouetteEdge { a, b, ia, ib });
-    }
-    out
 }
 
 /// One corner of a volume quadrilateral with the silhouette edge it comes from.
@@ -254,24 +186,11 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64) 
     (vertices, stats)
 }
 
-fn mesh_key(mesh: &PreparedMesh) -> u64 {
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    mesh.faces.hash(&mut h);
-    for v in &mesh.vertices {
-        v.to_array().map(f64::to_bits).hash(&mut h);
-    }
-    h.finish()
-}
-
 pub struct PenumbraVolumeMaps {
     volume_pipeline: wgpu::RenderPipeline,
     volume_layout: wgpu::BindGroupLayout,
     visibility_pipeline: wgpu::ComputePipeline,
     visibility_layout: wgpu::BindGroupLayout,
-    /// Topology per mesh content (built once while the mesh is unchanged, 4.1.1).
-    topologies: Mutex<HashMap<u64, Arc<Topology>>>,
-    /// Silhouettes per (mesh, light centre), recomputed only when either moves.
-    silhouettes: Mutex<HashMap<(u64, [u64; 3], bool), Arc<Vec<SilhouetteEdge>>>>,
 }
 
 /// What one PVM render produced besides visibility.
@@ -285,7 +204,6 @@ pub struct PvmFrame {
     pub cache_hits: usize,
 }
 
-const CACHE_LIMIT: usize = 256;
 
 impl PenumbraVolumeMaps {
     pub fn new(device: &wgpu::Device) -> Self {
@@ -336,57 +254,7 @@ impl PenumbraVolumeMaps {
             volume_layout,
             visibility_pipeline,
             visibility_layout,
-            topologies: Mutex::new(HashMap::new()),
-            silhouettes: Mutex::new(HashMap::new()),
         }
-    }
-
-    /// Silhouette edges of every mesh, through the caches; checks manifoldness.
-    fn silhouettes(&self, scene: &PreparedScene, l: DVec3, params: &PvmParams) -> Result<(Vec<SilhouetteEdge>, usize)> {
-        let boundary = params.open_edges == OpenEdges::Silhouette;
-        let mut all = Vec::new();
-        let mut hits = 0;
-        let light_key = l.to_array().map(f64::to_bits);
-        for (index, mesh) in scene.meshes.iter().enumerate() {
-            let key = mesh_key(mesh);
-            let cached = self.silhouettes.lock().ok().and_then(|c| c.get(&(key, light_key, boundary)).cloned());
-            let edges = match cached {
-                Some(edges) => {
-                    hits += 1;
-                    edges
-                }
-                None => {
-                    let topology = self.topology(key, mesh);
-                    topology.require_closed(&mesh.name, boundary)?;
-                    let edges = Arc::new(silhouette(&topology, l, boundary));
-                    if let Ok(mut c) = self.silhouettes.lock() {
-                        if c.len() >= CACHE_LIMIT {
-                            c.clear();
-                        }
-                        c.insert((key, light_key, boundary), edges.clone());
-                    }
-                    edges
-                }
-            };
-            // Welded indices are per mesh: offset them so loops never join across meshes.
-            let offset = (index as u32) << 24;
-            all.extend(edges.iter().map(|e| SilhouetteEdge { ia: e.ia ^ offset, ib: e.ib ^ offset, ..*e }));
-        }
-        Ok((all, hits))
-    }
-
-    fn topology(&self, key: u64, mesh: &PreparedMesh) -> Arc<Topology> {
-        if let Some(t) = self.topologies.lock().ok().and_then(|c| c.get(&key).cloned()) {
-            return t;
-        }
-        let t = Arc::new(Topology::build(&mesh.vertices, &mesh.faces));
-        if let Ok(mut c) = self.topologies.lock() {
-            if c.len() >= CACHE_LIMIT {
-                c.clear();
-            }
-            c.insert(key, t.clone());
-        }
-        t
     }
 
     /// Pass 2: builds and renders the penumbra volume map.
@@ -396,6 +264,7 @@ impl PenumbraVolumeMaps {
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         params: &PvmParams,
+        silhouettes: &SilhouetteCache,
         scene: &PreparedScene,
         frustum: &LightFrustum,
         light: (DVec3, f64),
@@ -408,7 +277,7 @@ impl PenumbraVolumeMaps {
         let mut vertices = vertices;
         // A point light has no penumbra: skip the volumes entirely.
         if r > 0.0 {
-            let (edges, hits) = self.silhouettes(scene, l, params)?;
+            let (edges, hits) = silhouettes.edges(scene, l, params.open_edges)?;
             cache_hits = hits;
             let reach = 4.0 * frustum.far as f64 + 4.0 * r;
             let (v, s) = penumbra_volumes(&edges, l, r, reach);
@@ -527,6 +396,8 @@ mod tests {
         let faces: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
         Topology::build(&p, &faces)
     }
+
+    use crate::topology::Topology;
 
     #[test]
     fn cube_under_a_light_has_one_square_loop() {

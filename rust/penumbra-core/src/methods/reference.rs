@@ -89,7 +89,7 @@ pub fn light_samples(center: DVec3, radius: f64, axis: DVec3, n: u32, seed: u64)
     let columns = (n as f64).sqrt().ceil().max(1.0) as u32;
     let rows = n.div_ceil(columns);
     let (e1, e2) = axis.any_orthonormal_pair();
-    let mut rng = SplitMix(seed ^ 0x5EED_0F_9E37);
+    let mut rng = SplitMix(seed ^ 0x005E_ED0F_9E37);
     let mut out = Vec::with_capacity((columns * rows) as usize);
     for j in 0..rows {
         for i in 0..columns {
@@ -163,12 +163,12 @@ impl ReferenceShadows {
         let map = ShadowMapPass::create_map(device, params.shadow.map_size);
         let (map_view, visibility_view) = (layout::view(&map), layout::view(visibility));
         let weight = 1.0 / samples.len() as f32;
-        let culling = params.shadow.bias.culling();
+        let depth = params.shadow.bias.map_depth();
         let last = samples.len() - 1;
         for (i, s) in samples.iter().enumerate() {
             let frustum = LightFrustum::fit(s.as_vec3(), points.iter().copied())?;
             let first = i == 0;
-            shadow_pass.record_writes(device, encoder, &map, &frustum, culling, vertices.0, vertices.1, timestamps.and_then(|t| t.render_part(first, false)));
+            shadow_pass.record_part(device, encoder, &map, &frustum, depth, vertices, timestamps, (first, false));
             let mut test = params.shadow.uniform(&frustum, s.as_vec3().to_array(), 0.0, 0);
             test.set_center_w(weight);
             let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -1,6 +1,8 @@
 //! Depth-only shadow map from the light centre (Williams 1978) over the
-//! fitted frustum. Culling selects the map: none (first depth, every triangle
-//! casts) or front faces (second-depth map, Wang and Molnar 1994; Cournia 5.5).
+//! fitted frustum. [`MapDepth`] selects the surface stored: the first (every
+//! triangle casts), the second (front faces culled: Wang and Molnar 1994;
+//! Cournia 5.5) or the mid-point of the two (Woo 1992, which Cournia 5.5
+//! names as future work): both maps, then a full-screen pass averaging them.
 
 use wgpu::util::DeviceExt;
 
@@ -10,11 +12,14 @@ use crate::light_frustum::LightFrustum;
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Culling {
+pub enum MapDepth {
     /// Every triangle is in the map: the first surface seen from the light.
-    None,
+    First,
     /// Front faces culled: the second surface of closed casters.
-    FrontFaces,
+    Second,
+    /// Half-way between the first and the second surface (where there is no
+    /// second surface, half-way to the far plane).
+    Midpoint,
 }
 
 #[repr(C)]
@@ -29,6 +34,8 @@ pub struct ShadowMapPass {
     first_depth: wgpu::RenderPipeline,
     second_depth: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
+    midpoint: wgpu::RenderPipeline,
+    midpoint_layout: wgpu::BindGroupLayout,
 }
 
 impl ShadowMapPass {
@@ -61,10 +68,44 @@ impl ShadowMapPass {
                 cache: None,
             })
         };
+        let midpoint_layout = layout::bind_group_layout(
+            device,
+            "shadow_map::midpoint_layout",
+            &[layout::depth_texture(0), layout::depth_texture(1)],
+        );
+        let midpoint = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("shadow_map::midpoint_pipeline"),
+            layout: Some(&layout::pipeline_layout(device, "shadow_map::midpoint_pipeline_layout", &midpoint_layout)),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_midpoint"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
         Self {
             first_depth: pipeline("shadow_map::first_depth_pipeline", None),
             second_depth: pipeline("shadow_map::second_depth_pipeline", Some(wgpu::Face::Front)),
             layout,
+            midpoint,
+            midpoint_layout,
         }
     }
 
@@ -87,26 +128,27 @@ impl ShadowMapPass {
         encoder: &mut wgpu::CommandEncoder,
         map: &wgpu::Texture,
         frustum: &LightFrustum,
-        culling: Culling,
+        depth: MapDepth,
         vertices: &wgpu::Buffer,
         vertex_count: u32,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
-        self.record_writes(device, encoder, map, frustum, culling, vertices, vertex_count, timestamps.map(|t| t.render()));
+        self.record_part(device, encoder, map, frustum, depth, (vertices, vertex_count), timestamps, (true, true));
     }
 
-    /// [`Self::record`] with explicit timestamp writes (for parts of a named pass).
+    /// [`Self::record`] as part of a named pass made of several wgpu passes:
+    /// `(first, last)` say whether this map opens or closes it.
     #[allow(clippy::too_many_arguments)]
-    pub fn record_writes(
+    pub fn record_part(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         map: &wgpu::Texture,
         frustum: &LightFrustum,
-        culling: Culling,
-        vertices: &wgpu::Buffer,
-        vertex_count: u32,
-        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+        depth: MapDepth,
+        vertices: (&wgpu::Buffer, u32),
+        timestamps: Option<PassTimestamps<'_>>,
+        (first, last): (bool, bool),
     ) {
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("shadow_map::uniforms"),
@@ -114,27 +156,60 @@ impl ShadowMapPass {
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let bind_group = layout::bind_group(device, "shadow_map::bind_group", &self.layout, &[uniforms.as_entire_binding()]);
-        let view = layout::view(map);
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shadow_map::pass"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &view,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                stencil_ops: None,
-            }),
-            timestamp_writes,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(match culling {
-            Culling::None => &self.first_depth,
-            Culling::FrontFaces => &self.second_depth,
-        });
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.set_vertex_buffer(0, vertices.slice(..));
-        pass.draw(0..vertex_count, 0..1);
+        let draw = |encoder: &mut wgpu::CommandEncoder, target: &wgpu::Texture, pipeline, writes| {
+            let view = layout::view(target);
+            let mut pass = begin_depth_pass(encoder, &view, writes);
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.set_vertex_buffer(0, vertices.0.slice(..));
+            pass.draw(0..vertices.1, 0..1);
+        };
+        let part = |first: bool, last: bool| timestamps.and_then(|t| t.render_part(first, last));
+        match depth {
+            MapDepth::First => draw(encoder, map, &self.first_depth, part(first, last)),
+            MapDepth::Second => draw(encoder, map, &self.second_depth, part(first, last)),
+            MapDepth::Midpoint => {
+                let size = (map.width(), map.height());
+                let near = Self::create_map(device, size.0);
+                let far = Self::create_map(device, size.0);
+                draw(encoder, &near, &self.first_depth, part(first, false));
+                draw(encoder, &far, &self.second_depth, None);
+                let bind_group = layout::bind_group(
+                    device,
+                    "shadow_map::midpoint_bind_group",
+                    &self.midpoint_layout,
+                    &[
+                        wgpu::BindingResource::TextureView(&layout::view(&near)),
+                        wgpu::BindingResource::TextureView(&layout::view(&far)),
+                    ],
+                );
+                let view = layout::view(map);
+                let mut pass = begin_depth_pass(encoder, &view, part(false, last));
+                pass.set_pipeline(&self.midpoint);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.draw(0..3, 0..1);
+            }
+        }
     }
+}
+
+fn begin_depth_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    view: &wgpu::TextureView,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("shadow_map::pass"),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+            stencil_ops: None,
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 /// The light's view for passes that rasterise from it (shadow maps, volumes).

@@ -4,7 +4,9 @@
 //                   both in texels of the map at the receiver's depth;
 //   mode 1 `second_depth`: map of back faces (front faces culled; Wang and
 //                   Molnar 1994), compared without bias;
-//   mode 2 `none`: raw comparison (shows acne; for study).
+//   mode 2 `none`: raw comparison (shows acne; for study);
+//   mode 3 `midpoint`: map half-way between first and second depth (Woo
+//                   1992), compared without bias.
 
 struct ShadowTest {
     light_space: LightSpace,

@@ -1,0 +1,166 @@
+//! Silhouette edges with respect to the light centre (Cournia 4.1.1), shared
+//! by the volume methods (`pvm`, `pvmf`), with the caches that make them cheap
+//! to repeat: topology per mesh content, silhouettes per (mesh, light centre).
+
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
+use std::sync::{Arc, Mutex};
+
+use glam::DVec3;
+
+use crate::error::Result;
+use crate::scene::{PreparedMesh, PreparedScene};
+use crate::topology::{Topology, NO_FACE};
+
+/// How casters with boundary edges are treated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OpenEdges {
+    /// Casters must be closed 2-manifolds (the paper's assumption).
+    Error,
+    /// Boundary edges of open meshes are silhouette edges.
+    Silhouette,
+}
+
+impl OpenEdges {
+    pub const NAMES: [&'static str; 2] = ["error", "silhouette"];
+
+    pub fn parse(name: &str) -> Self {
+        if name == "silhouette" {
+            OpenEdges::Silhouette
+        } else {
+            OpenEdges::Error
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            OpenEdges::Error => "error",
+            OpenEdges::Silhouette => "silhouette",
+        }
+    }
+}
+
+/// A silhouette edge `a -> b`, oriented so that the hard-shadow plane normal
+/// `(b - a) x (a - l)` points away from the occluder.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SilhouetteEdge {
+    pub a: DVec3,
+    pub b: DVec3,
+    /// Welded vertex indices of a and b.
+    pub ia: u32,
+    pub ib: u32,
+}
+
+/// Silhouette edges of one mesh with respect to the light centre `l` (4.1.1):
+/// edges between a face facing the light and one facing away, plus, when
+/// `boundary` is set, every edge with a single face.
+pub fn silhouette(topology: &Topology, l: DVec3, boundary: bool) -> Vec<SilhouetteEdge> {
+    let facing: Vec<bool> = (0..topology.faces.len() as u32)
+        .map(|f| {
+            let centroid = topology.faces[f as usize].iter().map(|&i| topology.positions[i as usize]).sum::<DVec3>() / 3.0;
+            topology.face_normal(f).dot(l - centroid) > 0.0
+        })
+        .collect();
+    let mut out = Vec::new();
+    for e in &topology.edges {
+        let [f0, f1] = e.faces;
+        let is_boundary = f0 == NO_FACE || f1 == NO_FACE;
+        if is_boundary && !boundary {
+            continue;
+        }
+        if !is_boundary && facing[f0 as usize] == facing[f1 as usize] {
+            continue;
+        }
+        let (mut ia, mut ib) = (e.v[0], e.v[1]);
+        let (mut a, mut b) = (topology.positions[ia as usize], topology.positions[ib as usize]);
+        // Both faces of a silhouette edge lie on the occluder's side of the
+        // plane through the edge and the light; take the first that is off it.
+        let normal = (b - a).cross(a - l);
+        let side = [f0, f1]
+            .iter()
+            .filter(|&&f| f != NO_FACE)
+            .map(|&f| normal.dot(topology.opposite_vertex(f, e) - a))
+            .find(|d| d.abs() > 1e-12 * normal.length() * (b - a).length().max(1e-300))
+            .unwrap_or(0.0);
+        if side > 0.0 {
+            std::mem::swap(&mut a, &mut b);
+            std::mem::swap(&mut ia, &mut ib);
+        }
+        out.push(SilhouetteEdge { a, b, ia, ib });
+    }
+    out
+}
+
+fn mesh_key(mesh: &PreparedMesh) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    mesh.faces.hash(&mut h);
+    for v in &mesh.vertices {
+        v.to_array().map(f64::to_bits).hash(&mut h);
+    }
+    h.finish()
+}
+
+const CACHE_LIMIT: usize = 256;
+
+/// (mesh content, light centre bits, boundary edges count).
+type SilhouetteKey = (u64, [u64; 3], bool);
+
+/// Topology and silhouette caches, owned by the renderer and shared by the
+/// methods that need silhouettes.
+#[derive(Default)]
+pub struct SilhouetteCache {
+    /// Topology per mesh content (built once while the mesh is unchanged, 4.1.1).
+    topologies: Mutex<HashMap<u64, Arc<Topology>>>,
+    /// Silhouettes per (mesh, light centre), recomputed only when either moves.
+    silhouettes: Mutex<HashMap<SilhouetteKey, Arc<Vec<SilhouetteEdge>>>>,
+}
+
+impl SilhouetteCache {
+    /// Silhouette edges of every mesh, through the caches; checks manifoldness.
+    pub fn edges(&self, scene: &PreparedScene, l: DVec3, open_edges: OpenEdges) -> Result<(Vec<SilhouetteEdge>, usize)> {
+        let boundary = open_edges == OpenEdges::Silhouette;
+        let mut all = Vec::new();
+        let mut hits = 0;
+        let light_key = l.to_array().map(f64::to_bits);
+        for (index, mesh) in scene.meshes.iter().enumerate() {
+            let key = mesh_key(mesh);
+            let cached = self.silhouettes.lock().ok().and_then(|c| c.get(&(key, light_key, boundary)).cloned());
+            let edges = match cached {
+                Some(edges) => {
+                    hits += 1;
+                    edges
+                }
+                None => {
+                    let topology = self.topology(key, mesh);
+                    topology.require_closed(&mesh.name, boundary)?;
+                    let edges = Arc::new(silhouette(&topology, l, boundary));
+                    if let Ok(mut c) = self.silhouettes.lock() {
+                        if c.len() >= CACHE_LIMIT {
+                            c.clear();
+                        }
+                        c.insert((key, light_key, boundary), edges.clone());
+                    }
+                    edges
+                }
+            };
+            // Welded indices are per mesh: offset them so loops never join across meshes.
+            let offset = (index as u32) << 24;
+            all.extend(edges.iter().map(|e| SilhouetteEdge { ia: e.ia ^ offset, ib: e.ib ^ offset, ..*e }));
+        }
+        Ok((all, hits))
+    }
+
+    fn topology(&self, key: u64, mesh: &PreparedMesh) -> Arc<Topology> {
+        if let Some(t) = self.topologies.lock().ok().and_then(|c| c.get(&key).cloned()) {
+            return t;
+        }
+        let t = Arc::new(Topology::build(&mesh.vertices, &mesh.faces));
+        if let Ok(mut c) = self.topologies.lock() {
+            if c.len() >= CACHE_LIMIT {
+                c.clear();
+            }
+            c.insert(key, t.clone());
+        }
+        t
+    }
+}
