@@ -57,7 +57,7 @@ def main() -> None:
         scene = penumbra.scenes.get(name, width=args.size, height=args.size, light_radius=0.0)
         exact = None
         for map_size in args.map_sizes:
-            for bias in ("slope", "second_depth", "none"):
+            for bias in ("slope", "second_depth", "midpoint", "none"):
                 result = renderer.render(scene, map_size=map_size, bias=bias)
                 if exact is None:
                     exact = exact_visibility(scene, result)

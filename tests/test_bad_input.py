@@ -106,7 +106,7 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("unknown_scene", lambda r: penumbra.scenes.get("teapot"), ParameterError, ["unknown scene", "sphere_on_plane"]),
     # Methods and parameters
     ("unknown_method", render(method="magic"), ParameterError, ["unknown method 'magic'", "hard"]),
-    ("method_not_implemented", render(method="pvmf"), ParameterError, ["'pvmf'", "not implemented"]),
+    ("method_not_implemented", render(method="wedges"), ParameterError, ["'wedges'", "not implemented"]),
     ("unknown_parameter", render(kernel=3), ParameterError, ["kernel", "map_size"]),
     ("map_size_too_small", render(map_size=8), ParameterError, ["map_size", "[16, 16384]", "8"]),
     ("map_size_wrong_type", render(map_size="big"), ParameterError, ["map_size", "integer"]),

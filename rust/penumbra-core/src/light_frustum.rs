@@ -97,6 +97,14 @@ impl LightFrustum {
         })
     }
 
+    /// The same frustum with its near plane moved to `near` (0 < near < far):
+    /// for geometry that starts nearer the light than the scene does (PVMF's
+    /// moved edge points). Maps store linear depth, so only clipping changes.
+    pub fn with_near(&self, near: f32) -> Self {
+        let near = near.clamp(self.far * 1e-6, self.near);
+        Self { projection: off_centre_perspective(self.window, near, self.far), near, ..*self }
+    }
+
     /// World-space size of one texel at light-view depth `z`, for a `map_size` map.
     pub fn texel_size_at(&self, z: f32, map_size: u32) -> f32 {
         let w = self.window;

@@ -13,6 +13,7 @@ use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
 use crate::light_frustum::LightFrustum;
 use crate::methods::hard::HardShadow;
 use crate::methods::pvm::PenumbraVolumeMaps;
+use crate::methods::pvmf::PenumbraVolumeMaskFiltering;
 use crate::methods::reference::ReferenceShadows;
 use crate::methods::silhouettes::SilhouetteCache;
 use crate::methods::{MethodConfig, ParamValue};
@@ -97,6 +98,7 @@ pub struct Renderer {
     hard: HardShadow,
     pvm: PenumbraVolumeMaps,
     reference: ReferenceShadows,
+    pvmf: PenumbraVolumeMaskFiltering,
     silhouettes: SilhouetteCache,
 }
 
@@ -106,7 +108,7 @@ impl Renderer {
     pub fn new(use_timestamps: bool) -> Result<Self> {
         let ctx = GpuContext::new()?;
         let device = &ctx.device;
-        let (gbuffer, shadow_map, shading, hard, pvm, reference) = ctx.scoped(|| {
+        let (gbuffer, shadow_map, shading, hard, pvm, reference, pvmf) = ctx.scoped(|| {
             Ok((
                 GBufferPass::new(device),
                 ShadowMapPass::new(device),
@@ -114,9 +116,11 @@ impl Renderer {
                 HardShadow::new(device),
                 PenumbraVolumeMaps::new(device),
                 ReferenceShadows::new(device),
+                PenumbraVolumeMaskFiltering::new(device),
             ))
         })?;
-        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, pvm, reference, silhouettes: SilhouetteCache::default() })
+        let silhouettes = SilhouetteCache::default();
+        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, pvm, reference, pvmf, silhouettes })
     }
 
     pub fn adapter(&self) -> &AdapterSummary {
@@ -223,7 +227,9 @@ impl Renderer {
         stats.insert("map_size".into(), settings.map_size as i64);
         let light = (scene.light.center, scene.light.radius);
         let pvm_frame;
-        let mut counter = None;
+        let pvmf_frame;
+        // A method's atomic counters and their stat names.
+        let mut counters: Option<(&wgpu::Buffer, &[&str])> = None;
         match method {
             MethodConfig::Hard(params) => {
                 profiler.pass("visibility", |encoder, ts| {
@@ -262,11 +268,46 @@ impl Renderer {
                 stats.insert("silhouette_junction_vertices".into(), s.junction_vertices as i64);
                 stats.insert("light_parallel_edges".into(), s.light_parallel_edges as i64);
                 stats.insert("silhouette_cache_hits".into(), pvm_frame.cache_hits as i64);
-                counter = Some(&pvm_frame.counter);
+                counters = Some((&pvm_frame.counter, &["pixels_in_volume"]));
                 intermediates.push(Intermediate::depth("pvm_volume_depth", &pvm_frame.volume_depth));
                 intermediates.push(Intermediate::color("pvm_edge0", &pvm_frame.edge0, 3));
                 intermediates.push(Intermediate::color("pvm_edge1", &pvm_frame.edge1, 3));
                 intermediates.push(Intermediate::color("pvm_in_volume", &pvm_frame.membership, 1));
+            }
+            MethodConfig::Pvmf(params) => {
+                let l = glam::Vec3::from(light.0).as_dvec3();
+                let mut built = None;
+                profiler.pass("mask", |encoder, ts| {
+                    built = Some(self.pvmf.record_mask(
+                        device, encoder, params, &self.silhouettes, prepared, frustum, (l, light.1 as f64), size, ts,
+                    ));
+                })?;
+                pvmf_frame = built.expect("the pass ran")?;
+                profiler.pass("estimation", |encoder, ts| {
+                    self.pvmf.record_estimate(
+                        device, encoder, params, &pvmf_frame, &gbuffer, &shadow_map, frustum, light, &visibility, ts,
+                    )
+                })?;
+                if pvmf_frame.raw.is_some() {
+                    profiler.pass("blur", |encoder, ts| {
+                        self.pvmf.record_blur(device, encoder, params, &pvmf_frame, &gbuffer, &visibility, ts)
+                    })?;
+                }
+                let s = &pvmf_frame.stats;
+                stats.insert("silhouette_edges".into(), s.silhouette_edges as i64);
+                stats.insert("mask_quads".into(), s.mask_quads as i64);
+                stats.insert("light_parallel_edges".into(), s.light_parallel_edges as i64);
+                stats.insert("silhouette_cache_hits".into(), pvmf_frame.cache_hits as i64);
+                counters = Some((&pvmf_frame.counters, &crate::methods::pvmf::COUNTERS));
+                intermediates.push(Intermediate::depth("pvmf_mask_depth", &pvmf_frame.mask_depth));
+                intermediates.push(Intermediate::color("pvmf_edge_distance", &pvmf_frame.edge_distance, 1));
+                intermediates.push(Intermediate::color(
+                    "pvmf_visibility_raw",
+                    pvmf_frame.raw.as_ref().unwrap_or(&visibility),
+                    1,
+                ));
+                intermediates.push(Intermediate::color("pvmf_blur_mask", &pvmf_frame.blur_mask, 1));
+                intermediates.push(Intermediate::color("pvmf_filter_width", &pvmf_frame.filter_width, 1));
             }
         }
         profiler.pass("shading", |encoder, ts| {
@@ -287,8 +328,8 @@ impl Renderer {
         if !options.intermediates {
             intermediates.clear();
         }
-        if let Some(counter) = counter {
-            pending.push(readback::copy_buffer(device, &mut encoder, counter, 4));
+        if let Some((buffer, names)) = counters {
+            pending.push(readback::copy_buffer(device, &mut encoder, buffer, 4 * names.len() as u32));
         }
         for i in &intermediates {
             pending.push(readback::copy_texture(device, &mut encoder, i.texture, i.aspect));
@@ -327,9 +368,11 @@ impl Renderer {
             .collect();
         stats.insert("geometry_pixels".into(), object_id.iter().filter(|&&i| i >= 0).count() as i64);
         images.push(Image { name: "object_id".into(), shape: vec![h, w], data: ImageData::I32(object_id) });
-        if counter.is_some() {
-            let count: Vec<u32> = readback::cast_vec(bytes.next().unwrap_or_default());
-            stats.insert("pixels_in_volume".into(), count.first().copied().unwrap_or(0) as i64);
+        if let Some((_, names)) = counters {
+            let counts: Vec<u32> = readback::cast_vec(bytes.next().unwrap_or_default());
+            for (i, name) in names.iter().enumerate() {
+                stats.insert((*name).into(), counts.get(i).copied().unwrap_or(0) as i64);
+            }
         }
         for i in &intermediates {
             let raw = readback::cast_vec::<f32>(bytes.next().unwrap_or_default());

@@ -40,6 +40,18 @@ pub fn pvm() -> String {
     compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/pvm.wgsl")])
 }
 
+pub fn pvmf_mask() -> String {
+    compose(&[include_str!("passes/shadow_map.wgsl"), include_str!("methods/pvmf_mask.wgsl")])
+}
+
+pub fn pvmf() -> String {
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF, include_str!("methods/pvmf.wgsl")])
+}
+
+pub fn pvmf_blur() -> String {
+    compose(&[include_str!("methods/pvmf_blur.wgsl")])
+}
+
 /// Every composed shader with the files it is made of (relative to `src/`).
 pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
     vec![
@@ -67,6 +79,19 @@ pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
             pvm(),
             &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/pvm.wgsl"],
         ),
+        ("pvmf_mask", pvmf_mask(), &["passes/shadow_map.wgsl", "methods/pvmf_mask.wgsl"]),
+        (
+            "pvmf",
+            pvmf(),
+            &[
+                "shaders/common.wgsl",
+                "shaders/light_space.wgsl",
+                "shaders/shadow_test.wgsl",
+                "shaders/pcf.wgsl",
+                "methods/pvmf.wgsl",
+            ],
+        ),
+        ("pvmf_blur", pvmf_blur(), &["methods/pvmf_blur.wgsl"]),
     ]
 }
 

@@ -32,7 +32,7 @@ pub enum BiasMode {
 }
 
 impl BiasMode {
-    const NAMES: [&'static str; 4] = ["slope", "second_depth", "midpoint", "none"];
+    pub const NAMES: [&'static str; 4] = ["slope", "second_depth", "midpoint", "none"];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -72,9 +72,14 @@ const MAX_SLOPE: f32 = 10.0;
 
 impl ShadowMapSettings {
     pub fn read(r: &mut ParamReader<'_>) -> Result<Self> {
+        Self::read_with_bias(r, "slope")
+    }
+
+    /// [`Self::read`] with another default bias scheme (one of `BiasMode::NAMES`).
+    pub fn read_with_bias(r: &mut ParamReader<'_>, default_bias: &'static str) -> Result<Self> {
         Ok(Self {
             map_size: r.int("map_size", 2048, 16, 16384)? as u32,
-            bias: match r.choice("bias", "slope", &BiasMode::NAMES)? {
+            bias: match r.choice("bias", default_bias, &BiasMode::NAMES)? {
                 "second_depth" => BiasMode::SecondDepth,
                 "midpoint" => BiasMode::Midpoint,
                 "none" => BiasMode::None,

@@ -7,11 +7,13 @@ use crate::error::{Error, Result};
 
 pub mod hard;
 pub mod pvm;
+pub mod pvmf;
 pub mod reference;
 pub mod silhouettes;
 
 pub use hard::{BiasMode, HardParams, ShadowMapSettings};
 pub use pvm::PvmParams;
+pub use pvmf::PvmfParams;
 pub use reference::ReferenceParams;
 
 /// A parameter value as it arrives from Python or the CLI.
@@ -42,7 +44,7 @@ pub const METHODS: &[(&str, bool)] = &[
     ("reference", true),
     ("adaptive", false),
     ("pvm", true),
-    ("pvmf", false),
+    ("pvmf", true),
     ("wedges", false),
     ("backprojection", false),
 ];
@@ -52,6 +54,7 @@ pub const METHODS: &[(&str, bool)] = &[
 pub enum MethodConfig {
     Hard(HardParams),
     Pvm(PvmParams),
+    Pvmf(PvmfParams),
     Reference(ReferenceParams),
 }
 
@@ -61,6 +64,7 @@ impl MethodConfig {
         let config = match method {
             "hard" => MethodConfig::Hard(HardParams::read(&mut reader)?),
             "pvm" => MethodConfig::Pvm(PvmParams::read(&mut reader)?),
+            "pvmf" => MethodConfig::Pvmf(PvmfParams::read(&mut reader)?),
             "reference" => MethodConfig::Reference(ReferenceParams::read(&mut reader)?),
             _ => {
                 let implemented: Vec<&str> = METHODS.iter().filter(|m| m.1).map(|m| m.0).collect();
@@ -81,6 +85,7 @@ impl MethodConfig {
         match self {
             MethodConfig::Hard(_) => "hard",
             MethodConfig::Pvm(_) => "pvm",
+            MethodConfig::Pvmf(_) => "pvmf",
             MethodConfig::Reference(_) => "reference",
         }
     }
@@ -90,6 +95,7 @@ impl MethodConfig {
         match self {
             MethodConfig::Hard(p) => p.effective(),
             MethodConfig::Pvm(p) => p.effective(),
+            MethodConfig::Pvmf(p) => p.effective(),
             MethodConfig::Reference(p) => p.effective(),
         }
     }
@@ -100,6 +106,7 @@ impl MethodConfig {
         match self {
             MethodConfig::Hard(p) => p,
             MethodConfig::Pvm(p) => &p.shadow,
+            MethodConfig::Pvmf(p) => &p.shadow,
             MethodConfig::Reference(p) => &p.shadow,
         }
     }

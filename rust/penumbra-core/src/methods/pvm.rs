@@ -427,7 +427,7 @@ mod tests {
         let (vertices, _) = penumbra_volumes(&edges, l, 0.5, 10.0);
         // Far corners: outer quads spread beyond the hard shadow's, inner ones inside it.
         let hard_spread = |y: f32| 0.5 * (6.0 - y) / (6.0 - 2.5);
-        let (outer, inner) = vertices.split_at(6 * 1);
+        let (outer, inner) = vertices.split_at(6);
         let far_outer = outer.iter().map(|v| v.position).min_by(|a, b| a[1].total_cmp(&b[1])).unwrap();
         let far_inner = vertices[6..12].iter().map(|v| v.position).min_by(|a, b| a[1].total_cmp(&b[1])).unwrap();
         let spread = |p: [f32; 3]| p[0].abs().max(p[2].abs());

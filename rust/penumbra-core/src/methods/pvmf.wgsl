@@ -1,0 +1,133 @@
+// PVMF pass 3 (Cournia 5.2): visibility estimation per camera pixel. Pixels
+// inside a penumbra volume (the mask is nearer the light than the pixel) or
+// failing the shadow-map test take an n_pcf x n_pcf jittered
+// percentage-closer filter of width w_pcf over the depth shadow map; all
+// others keep the shadow-map test's 0 or 1 and take no taps.
+
+@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
+@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
+@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(3) var mask_depth: texture_depth_2d;
+@group(0) @binding(4) var edge_distance: texture_2d<f32>;
+@group(0) @binding(5) var shadow_sampler: sampler_comparison;
+// center.w: the light's radius r.
+@group(0) @binding(6) var<uniform> pvmf: ShadowTest;
+
+struct PvmfSettings {
+    s_p: f32,
+    n_pcf: u32,
+    seed: u32,
+    // bit 0: disk kernel (else the paper's square); bit 1: skip pixels that
+    // fail the shadow-map test outside every volume (else filter them, 5.2).
+    flags: u32,
+};
+@group(0) @binding(7) var<uniform> settings: PvmfSettings;
+@group(0) @binding(8) var visibility_out: texture_storage_2d<r32float, write>;
+@group(0) @binding(9) var blur_mask_out: texture_storage_2d<r32float, write>;
+@group(0) @binding(10) var filter_width_out: texture_storage_2d<r32float, write>;
+// masked, filtered, blurred pixels.
+@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>, 3>;
+
+// d_o (5.2): the mean of the d_e channel over a 5 x 5 texel region (3 x 3
+// taps, 2 texels apart) around the receiver's projection, over texels that
+// hold a volume (d_e > 0). The paper does not give the region's size. Where
+// no volume is near (an umbra pixel outside every volume), the occluder's
+// distance is read from the shadow map instead: the stored depth along the
+// receiver's light ray.
+fn occluder_distance(r: Receiver) -> f32 {
+    let size = vec2<i32>(textureDimensions(edge_distance));
+    let centre = vec2<i32>(floor(r.coords));
+    var sum = 0.0;
+    var count = 0.0;
+    for (var j = -1; j <= 1; j++) {
+        for (var i = -1; i <= 1; i++) {
+            let t = clamp(centre + 2 * vec2<i32>(i, j), vec2<i32>(0), size - 1);
+            let d = textureLoad(edge_distance, t, 0).x;
+            if (d > 0.0) {
+                sum += d;
+                count += 1.0;
+            }
+        }
+    }
+    if (count > 0.0) {
+        return sum / count;
+    }
+    let depth = textureLoad(shadow_map, clamp(centre, vec2<i32>(0), size - 1), 0) * pvmf.light_space.depth.y;
+    // light_ray has unit light depth, so depth * |ray| is the distance.
+    return depth * length(light_ray(pvmf.light_space, r.coords));
+}
+
+// w_pcf (5.2) in map texels per axis:
+//   w_pcf = s_p (d_r - d_o) r / (2 d_o d_r tan(alpha / 2)),
+// where 2 d_r tan(alpha / 2) is the frustum's width at the receiver's depth.
+// d_e, hence d_o, is a distance from the light; d_r is taken as one too, so
+// that (d_r - d_o) / d_o compares like with like, and the frustum's width
+// (per axis: the map may be off-centre and non-square) at the receiver's
+// light depth z_r converts to the map.
+fn filter_width(r: Receiver, p: vec3<f32>, d_o: f32) -> vec2<f32> {
+    let radius = pvmf.center.w;
+    let d_r = length(p - pvmf.center.xyz);
+    // d_o > 0: it is the distance of silhouette edges or map surfaces from
+    // the light, which no geometry touches; an occluder at or behind the
+    // receiver gives no penumbra.
+    let spread = max(d_r - d_o, 0.0) / max(d_o, 1e-30);
+    let window = pvmf.light_space.window;
+    let extent = vec2<f32>(window.y - window.x, window.w - window.z) * max(r.depth, 1e-30);
+    let w = settings.s_p * spread * radius / extent * pvmf.light_space.depth.z;
+    // Wider than the map would only repeat its border.
+    return min(w, vec2<f32>(pvmf.light_space.depth.z));
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(gbuffer_normal);
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let px = vec2<i32>(id.xy);
+    let nt = textureLoad(gbuffer_normal, px, 0);
+    var v = 0.0;
+    var blur = 0.0;
+    var width = 0.0;
+    if (!is_background(nt)) {
+        let p = textureLoad(gbuffer_position, px, 0).xyz;
+        let n = nt.xyz;
+        let cos_theta = light_cosine(pvmf, p, n);
+        // Centre below the surface's horizon: the surface itself hides it.
+        if (cos_theta > 0.0) {
+            let q = biased_receiver(pvmf, p, n, cos_theta);
+            let lit = q.w <= map_depth(pvmf, shadow_map, q.xyz);
+            v = select(0.0, 1.0, lit);
+            // A point light (r = 0) has no volumes and no penumbra: the test is all.
+            let in_volume = pvmf.center.w > 0.0 && map_depth(pvmf, mask_depth, q.xyz) < q.w;
+            if (in_volume) {
+                atomicAdd(&counters[0], 1u);
+            }
+            let filter_umbra = (settings.flags & 2u) == 0u && pvmf.center.w > 0.0;
+            if (in_volume || (!lit && filter_umbra)) {
+                atomicAdd(&counters[1], 1u);
+                let r = pcf_receiver(pvmf, p, n);
+                let w = filter_width(r, p, occluder_distance(r));
+                width = w.x;
+                let n_pcf = settings.n_pcf;
+                var sum = 0.0;
+                for (var i = 0u; i < n_pcf * n_pcf; i++) {
+                    // An n_pcf x n_pcf grid of cells w_pcf / n_pcf square, one
+                    // jittered tap per cell (5.2, Fig. 5.3).
+                    var s = grid_tap(i, n_pcf, jitter2(id.xy, settings.seed, i));
+                    if ((settings.flags & 1u) != 0u) {
+                        // The light's projection is a disk: the disk inscribed
+                        // in the square, with the same strata.
+                        s = 0.5 * square_to_disk(s);
+                    }
+                    sum += pcf_tap(pvmf, shadow_map, shadow_sampler, r, r.coords + s * w);
+                }
+                v = sum / f32(n_pcf * n_pcf);
+                blur = 1.0;
+            }
+        }
+    }
+    textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));
+    textureStore(blur_mask_out, px, vec4<f32>(blur, 0.0, 0.0, 0.0));
+    textureStore(filter_width_out, px, vec4<f32>(width, 0.0, 0.0, 0.0));
+}

@@ -1,0 +1,36 @@
+// PVMF pass 2 (Cournia 5.1): render every silhouette edge's overestimated
+// penumbra volume quadrilaterals from the light into the penumbra volume
+// mask: its depth channel (linear light depth / far, the volume nearest the
+// light) and, in a float channel, d_e, the distance from the light to the edge
+// that gave rise to the volume. Composed after passes/shadow_map.wgsl, whose
+// `shadow` uniform (the light's view) it uses.
+
+struct MaskVertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) light_depth: f32,
+    @location(1) @interpolate(flat) d_e: f32,
+};
+
+@vertex
+fn vs_mask(@location(0) position: vec3<f32>, @location(1) d_e: f32) -> MaskVertexOut {
+    var out: MaskVertexOut;
+    let p = vec4<f32>(position, 1.0);
+    out.clip = shadow.view_proj * p;
+    out.light_depth = -(shadow.view * p).z;
+    out.d_e = d_e;
+    return out;
+}
+
+struct MaskOut {
+    @builtin(frag_depth) depth: f32,
+    @location(0) d_e: f32,
+};
+
+@fragment
+fn fs_mask(in: MaskVertexOut) -> MaskOut {
+    var out: MaskOut;
+    // far > 0 by construction of the frustum.
+    out.depth = clamp(in.light_depth / shadow.depth.y, 0.0, 1.0);
+    out.d_e = in.d_e;
+    return out;
+}

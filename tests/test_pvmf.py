@@ -1,0 +1,214 @@
+"""Penumbra volume mask filtering (issue 5, Cournia chapter 5)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra.scenes import box, ground_plane, ground_slab
+
+RADII = [0.0, 1e-4, 0.05, 0.5, 2.2]
+
+
+def penumbra_pixels(result: penumbra.RenderResult, object_id: int = 0) -> np.ndarray:
+    v = result.visibility
+    return (v > 0.02) & (v < 0.98) & (result.object_id == object_id)
+
+
+def world_gradient(result: penumbra.RenderResult) -> np.ndarray:
+    """|grad v| per world unit along the image rows and columns (NaN where a
+    neighbour lies on another object), so 1/|grad v| is a local penumbra width."""
+    v, p, ids = result.visibility, result.position, result.object_id
+    out = np.full(v.shape, np.nan)
+    for axis in (0, 1):
+        dv = np.abs(np.diff(v, axis=axis))
+        dp = np.linalg.norm(np.diff(p, axis=axis), axis=-1)
+        same = np.diff(ids, axis=axis) == 0
+        g = np.where(same & (dp > 0), dv / np.where(dp > 0, dp, 1), np.nan)
+        pad = [(0, 1), (0, 0)] if axis == 0 else [(0, 0), (0, 1)]
+        out = np.fmax(out, np.pad(g, pad, constant_values=np.nan))
+    return out
+
+
+def test_every_scene_renders_with_its_passes_stats_and_intermediates(renderer: penumbra.Renderer) -> None:
+    for name in penumbra.scenes.names():
+        scene = penumbra.scenes.get(name, width=64, height=64)
+        result = renderer.render(scene, "pvmf", intermediates=True, map_size=512)
+        assert list(result.timings) == ["gbuffer", "shadow_map", "mask", "estimation", "blur", "shading", "readback"]
+        for key in ("pvmf_mask_depth", "pvmf_edge_distance", "pvmf_visibility_raw", "pvmf_blur_mask", "pvmf_filter_width", "shadow_map"):
+            assert key in result.images, key
+            assert np.isfinite(result.images[key]).all(), key
+        assert result.images["pvmf_edge_distance"].shape == (512, 512)
+        s = result.stats
+        assert s["mask_quads"] == 2 * (s["silhouette_edges"] - s["light_parallel_edges"]) > 0
+        # Filtered: masked pixels plus those failing the test outside every volume (5.2).
+        assert 0 < s["masked_pixels"] <= s["filtered_pixels"] == int(result["pvmf_blur_mask"].sum())
+        assert s["blurred_pixels"] == s["filtered_pixels"]
+        assert ((result.visibility >= 0) & (result.visibility <= 1)).all()
+        # Stored d_e is the light-to-edge distance: beyond the light's radius.
+        d_e = result["pvmf_edge_distance"]
+        assert (d_e[d_e > 0] > scene.light.radius).all()
+
+
+@pytest.mark.parametrize("name", penumbra.scenes.names())
+def test_no_nan_from_radius_zero_to_larger_than_the_casters(renderer: penumbra.Renderer, name: str) -> None:
+    for radius in RADII:
+        scene = penumbra.scenes.get(name, width=48, height=48, light_radius=radius)
+        for params in ({}, {"offsets": "radius", "kernel": "disk", "bias": "midpoint", "umbra": "skip"}):
+            result = renderer.render(scene, "pvmf", intermediates=True, map_size=512, **params)
+            for key, image in result.images.items():
+                assert np.isfinite(image).all(), (radius, key, params)
+            assert result.visibility.min() >= 0 and result.visibility.max() <= 1
+
+
+@pytest.mark.parametrize("bias", ["second_depth", "slope", "midpoint"])
+def test_radius_zero_is_the_hard_shadow_with_no_work(renderer: penumbra.Renderer, bias: str) -> None:
+    scene = penumbra.scenes.get("overlapping_casters", width=96, height=96, light_radius=0.0)
+    result = renderer.render(scene, "pvmf", bias=bias)
+    np.testing.assert_array_equal(result.visibility, renderer.render(scene, "hard", bias=bias).visibility)
+    assert result.stats["mask_quads"] == result.stats["filtered_pixels"] == result.stats["blurred_pixels"] == 0
+
+
+def test_n_blur_zero_leaves_the_raw_estimate(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get("cube_on_plane", width=96, height=96)
+    raw = renderer.render(scene, "pvmf", n_blur=0, intermediates=True)
+    blurred = renderer.render(scene, "pvmf", intermediates=True)
+    assert "blur" not in raw.timings and raw.stats["blurred_pixels"] == 0
+    np.testing.assert_array_equal(raw.visibility, raw["pvmf_visibility_raw"])
+    # The blur changes only the estimate's masked pixels, and it changes them.
+    np.testing.assert_array_equal(blurred["pvmf_visibility_raw"], raw.visibility)
+    outside = blurred["pvmf_blur_mask"] == 0
+    np.testing.assert_array_equal(blurred.visibility[outside], raw.visibility[outside])
+    assert np.abs(blurred.visibility - raw.visibility)[~outside].max() > 0.05
+
+
+def id_aware_blur(v: np.ndarray, mask: np.ndarray, ids: np.ndarray, n_blur: int) -> np.ndarray:
+    """Cournia 5.3 in numpy: per axis, the mean of the same-object texels
+    within n_blur / 2, only where the mask is set."""
+    half = n_blur // 2
+    for axis in (1, 0):
+        out = v.copy()
+        for y, x in zip(*np.nonzero(mask)):
+            line = v[y, :] if axis == 1 else v[:, x]
+            line_ids = ids[y, :] if axis == 1 else ids[:, x]
+            c = x if axis == 1 else y
+            lo, hi = max(c - half, 0), min(c + half + 1, len(line))
+            same = line_ids[lo:hi] == ids[y, x]
+            out[y, x] = line[lo:hi][same].mean()
+        v = out
+    return v
+
+
+def test_blur_is_separable_and_never_mixes_objects(renderer: penumbra.Renderer) -> None:
+    # The box's shadow falls at its own base: blurring across the object
+    # boundary would pull lit box values into the shadowed ground (5.3, B).
+    scene = penumbra.scenes.get("resting_box", width=64, height=64)
+    result = renderer.render(scene, "pvmf", n_blur=10, intermediates=True)
+    raw, mask, ids = result["pvmf_visibility_raw"], result["pvmf_blur_mask"] > 0, result.object_id
+    expected = id_aware_blur(raw.astype(np.float64), mask, ids, 10)
+    np.testing.assert_allclose(result.visibility, expected, atol=1e-5)
+    # Ignoring the ids would give a different image here.
+    mixed = id_aware_blur(raw.astype(np.float64), mask, np.zeros_like(ids), 10)
+    assert np.abs(mixed - expected).max() > 0.1
+
+
+def test_seed_fixes_the_jitter(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get("sphere_on_plane", width=64, height=64)
+    a = renderer.render(scene, "pvmf", n_blur=0, seed=3)
+    b = renderer.render(scene, "pvmf", n_blur=0, seed=3)
+    c = renderer.render(scene, "pvmf", n_blur=0, seed=4)
+    np.testing.assert_array_equal(a.visibility, b.visibility)
+    assert np.abs(a.visibility - c.visibility).max() > 0.01
+
+
+def test_penumbra_and_cost_grow_with_the_light_radius(renderer: penumbra.Renderer) -> None:
+    counts, filtered = [], []
+    for radius in (0.1, 0.4, 1.2):
+        scene = penumbra.scenes.get("cube_on_plane", width=96, height=96, light_radius=radius)
+        result = renderer.render(scene, "pvmf", offsets="radius", umbra="skip")
+        counts.append(int(penumbra_pixels(result).sum()))
+        filtered.append(result.stats["filtered_pixels"])
+    assert counts[0] < counts[1] < counts[2], counts
+    assert filtered[0] < filtered[1] < filtered[2], filtered
+
+
+def ground_penumbra_widths(result: penumbra.RenderResult) -> tuple[float, float]:
+    """Median penumbra width (1 / |grad v|, world units) on the ground near
+    the resting box's base and far from it (horizontal distance from the
+    box's axis below 0.9 and within 1.6-2.5; the box is 0.8 wide)."""
+    g = world_gradient(result)
+    ground = penumbra_pixels(result) & np.isfinite(g)
+    reach = np.linalg.norm(result.position[..., [0, 2]], axis=-1)
+    near, far = ground & (reach < 0.9), ground & (reach > 1.6) & (reach < 2.5)
+    assert near.sum() > 20 and far.sum() > 20, (near.sum(), far.sum())
+    return float(1 / np.median(g[near])), float(1 / np.median(g[far]))
+
+
+def test_contact_hardening_on_the_resting_box(renderer: penumbra.Renderer) -> None:
+    # The box stands on the ground: the true shadow is sharp where it meets
+    # the ground and widens with the height of the occluding edge above it.
+    scene = penumbra.scenes.get("resting_box", width=160, height=160)
+    near, far = ground_penumbra_widths(renderer.render(scene, "reference", n_samples=256))
+    # Measured 0.23-0.46 near against 1.05 far.
+    assert near < 0.5 * far, (near, far)
+    # PVMF hardens far less: its filter width follows d_e of the volume
+    # nearest the light, and near the base that is often the top edges'.
+    # Measured 1.8 near against 2.7 far (0.96 against 1.31 with n_blur = 0).
+    for params in ({}, {"n_blur": 0}):
+        near, far = ground_penumbra_widths(renderer.render(scene, "pvmf", **params))
+        assert near < 0.8 * far, (params, near, far)
+
+
+def test_pvmf_beats_hard_against_ground_truth_on_every_builtin_scene(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
+    pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
+    from penumbra import metrics
+
+    cache = tmp_path_factory.mktemp("gt")
+    for name in penumbra.scenes.names():
+        scene = penumbra.scenes.get(name, width=128, height=128)
+        gt = pm.ground_truth(scene, spp=256, cache_dir=cache)
+        hard = metrics.compare(renderer.render(scene, "hard"), gt)["visibility_rmse_penumbra"]
+        paper = metrics.compare(renderer.render(scene, "pvmf"), gt)["visibility_rmse_penumbra"]
+        best = metrics.compare(renderer.render(scene, "pvmf", kernel="disk", n_blur=0), gt)["visibility_rmse_penumbra"]
+        # Measured at 128x128 (hard: 0.27 everywhere): the paper's settings
+        # reach 0.53-0.78 of hard's penumbra RMSE (its 13-pixel blur is wide
+        # against these penumbrae), a disk kernel without blur 0.23-0.50. The
+        # sphere's share is the terminator, which every centre-tested method misses.
+        assert paper < 0.85 * hard, (name, paper, hard)
+        assert best < 0.6 * hard, (name, best, hard)
+
+
+def test_open_and_non_manifold_casters_need_the_option(renderer: penumbra.Renderer) -> None:
+    base = penumbra.scenes.get(width=48, height=48)
+    scene = penumbra.Scene([ground_plane(), base.meshes[1]], base.light, base.camera)
+    with pytest.raises(penumbra.MeshError, match=r"mesh 'ground'.*boundary edges"):
+        renderer.render(scene, "pvmf")
+    assert np.isfinite(renderer.render(scene, "pvmf", open_edges="silhouette", bias="slope").visibility).all()
+    bar = box((0.0, 2.0, 0.0), (1.0, 0.2, 1.0), name="finned")
+    fin = penumbra.Mesh(np.vstack([bar.vertices, [[0, 0.1, 0]]]), np.vstack([bar.faces, bar.faces[:1], bar.faces[1:2]]), transform=bar.transform, name="finned")
+    with pytest.raises(penumbra.MeshError, match=r"mesh 'finned'.*not a 2-manifold"):
+        renderer.render(penumbra.Scene([ground_slab(), fin], base.light, base.camera), "pvmf", open_edges="silhouette")
+
+
+def test_pvmf_parameters_are_checked(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get(width=16, height=16)
+    for bad, match in [
+        ({"s_e": 0.0}, r"s_e.*\(0, 1\]"),
+        ({"s_e": 1.5}, "s_e"),
+        ({"s_p": -1.0}, "s_p"),
+        ({"n_pcf": 0}, "n_pcf"),
+        ({"n_pcf": 2.5}, "n_pcf.*integer"),
+        ({"n_blur": -2}, "n_blur"),
+        ({"seed": -1}, "seed"),
+        ({"kernel": "gauss"}, "kernel"),
+        ({"offsets": "huge"}, "offsets"),
+        ({"umbra": "maybe"}, "umbra"),
+        ({"filter": "cubic"}, "filter"),
+        ({"bias": "third_depth"}, "bias"),
+        ({"falloff": True}, "unknown parameter"),
+    ]:
+        with pytest.raises(penumbra.ParameterError, match=match):
+            renderer.render(scene, "pvmf", **bad)
+    params = renderer.render(scene, "pvmf").params
+    assert params["bias"] == "second_depth" and params["n_pcf"] == 7 and params["n_blur"] == 12
