@@ -12,6 +12,8 @@ use crate::gpu::readback::{self, PendingReadback};
 use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
 use crate::light_frustum::LightFrustum;
 use crate::methods::hard::HardShadow;
+use crate::methods::pcf::{ComparisonSamplers, PercentageCloserFiltering};
+use crate::methods::pcss::PercentageCloserSoftShadows;
 use crate::methods::pvm::PenumbraVolumeMaps;
 use crate::methods::reference::ReferenceShadows;
 use crate::methods::{MethodConfig, ParamValue};
@@ -94,6 +96,9 @@ pub struct Renderer {
     shadow_map: ShadowMapPass,
     shading: ShadingPass,
     hard: HardShadow,
+    comparison_samplers: ComparisonSamplers,
+    pcf: PercentageCloserFiltering,
+    pcss: PercentageCloserSoftShadows,
     pvm: PenumbraVolumeMaps,
     reference: ReferenceShadows,
 }
@@ -114,7 +119,14 @@ impl Renderer {
                 ReferenceShadows::new(device),
             ))
         })?;
-        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, pvm, reference })
+        let (comparison_samplers, pcf, pcss) = ctx.scoped(|| {
+            Ok((
+                ComparisonSamplers::new(device),
+                PercentageCloserFiltering::new(device),
+                PercentageCloserSoftShadows::new(device),
+            ))
+        })?;
+        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, comparison_samplers, pcf, pcss, pvm, reference })
     }
 
     pub fn adapter(&self) -> &AdapterSummary {
@@ -221,7 +233,9 @@ impl Renderer {
         stats.insert("map_size".into(), settings.map_size as i64);
         let light = (scene.light.center, scene.light.radius);
         let pvm_frame;
-        let mut counter = None;
+        let pcss_frame;
+        // A method's atomic counters and the stats they fill, in order.
+        let mut counter: Option<(&wgpu::Buffer, &[&str])> = None;
         match method {
             MethodConfig::Hard(params) => {
                 profiler.pass("visibility", |encoder, ts| {
@@ -229,6 +243,25 @@ impl Renderer {
                         device, encoder, params, &gbuffer, &shadow_map, frustum, scene.light.center, &visibility, ts,
                     )
                 })?;
+            }
+            MethodConfig::Pcf(params) => {
+                profiler.pass("visibility", |encoder, ts| {
+                    self.pcf.record_visibility(
+                        device, encoder, params, &self.comparison_samplers, &gbuffer, &shadow_map, frustum, scene.light.center, &visibility, ts,
+                    )
+                })?;
+            }
+            MethodConfig::Pcss(params) => {
+                let mut recorded = None;
+                profiler.pass("visibility", |encoder, ts| {
+                    recorded = Some(self.pcss.record_visibility(
+                        device, encoder, params, &self.comparison_samplers, &gbuffer, &shadow_map, frustum, light, &visibility, ts,
+                    ));
+                })?;
+                pcss_frame = recorded.expect("the pass ran");
+                counter = Some((&pcss_frame.counters, crate::methods::pcss::COUNTER_NAMES));
+                intermediates.push(Intermediate::color("pcss_penumbra_width", &pcss_frame.penumbra_width, 1));
+                intermediates.push(Intermediate::color("pcss_blocker_depth", &pcss_frame.blocker_depth, 1));
             }
             MethodConfig::Reference(params) => {
                 let l = glam::Vec3::from(light.0).as_dvec3();
@@ -260,7 +293,7 @@ impl Renderer {
                 stats.insert("silhouette_junction_vertices".into(), s.junction_vertices as i64);
                 stats.insert("light_parallel_edges".into(), s.light_parallel_edges as i64);
                 stats.insert("silhouette_cache_hits".into(), pvm_frame.cache_hits as i64);
-                counter = Some(&pvm_frame.counter);
+                counter = Some((&pvm_frame.counter, &["pixels_in_volume"]));
                 intermediates.push(Intermediate::depth("pvm_volume_depth", &pvm_frame.volume_depth));
                 intermediates.push(Intermediate::color("pvm_edge0", &pvm_frame.edge0, 3));
                 intermediates.push(Intermediate::color("pvm_edge1", &pvm_frame.edge1, 3));
@@ -285,8 +318,8 @@ impl Renderer {
         if !options.intermediates {
             intermediates.clear();
         }
-        if let Some(counter) = counter {
-            pending.push(readback::copy_buffer(device, &mut encoder, counter, 4));
+        if let Some((counter, names)) = counter {
+            pending.push(readback::copy_buffer(device, &mut encoder, counter, 4 * names.len() as u32));
         }
         for i in &intermediates {
             pending.push(readback::copy_texture(device, &mut encoder, i.texture, i.aspect));
@@ -325,9 +358,11 @@ impl Renderer {
             .collect();
         stats.insert("geometry_pixels".into(), object_id.iter().filter(|&&i| i >= 0).count() as i64);
         images.push(Image { name: "object_id".into(), shape: vec![h, w], data: ImageData::I32(object_id) });
-        if counter.is_some() {
-            let count: Vec<u32> = readback::cast_vec(bytes.next().unwrap_or_default());
-            stats.insert("pixels_in_volume".into(), count.first().copied().unwrap_or(0) as i64);
+        if let Some((_, names)) = counter {
+            let counts: Vec<u32> = readback::cast_vec(bytes.next().unwrap_or_default());
+            for (i, name) in names.iter().enumerate() {
+                stats.insert((*name).into(), counts.get(i).copied().unwrap_or(0) as i64);
+            }
         }
         for i in &intermediates {
             let raw = readback::cast_vec::<f32>(bytes.next().unwrap_or_default());
