@@ -21,6 +21,9 @@ from penumbra.scenes import ground_plane
 
 CONFIGS: list[tuple[str, dict[str, Any]]] = [
     ("hard", {}),
+    ("pcf", {}),
+    ("pcss", {}),
+    ("pcss", {"sampling": "poisson"}),
     ("pvm", {}),
     ("pvm", {"falloff": False}),
     ("reference", {"n_samples": 256}),
