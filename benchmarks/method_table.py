@@ -21,8 +21,13 @@ from penumbra.scenes import ground_plane
 
 CONFIGS: list[tuple[str, dict[str, Any]]] = [
     ("hard", {}),
+    ("pcf", {}),
+    ("pcss", {}),
+    ("pcss", {"sampling": "poisson"}),
     ("pvm", {}),
     ("pvm", {"falloff": False}),
+    ("pvmf", {}),
+    ("pvmf", {"kernel": "disk", "n_blur": 0, "offsets": "radius", "umbra": "skip"}),
     ("reference", {"n_samples": 256}),
 ]
 

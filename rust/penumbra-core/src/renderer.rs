@@ -12,6 +12,8 @@ use crate::gpu::readback::{self, PendingReadback};
 use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
 use crate::light_frustum::LightFrustum;
 use crate::methods::hard::HardShadow;
+use crate::methods::pcf::{ComparisonSamplers, PercentageCloserFiltering};
+use crate::methods::pcss::PercentageCloserSoftShadows;
 use crate::methods::pvm::PenumbraVolumeMaps;
 use crate::methods::pvmf::PenumbraVolumeMaskFiltering;
 use crate::methods::reference::ReferenceShadows;
@@ -96,6 +98,9 @@ pub struct Renderer {
     shadow_map: ShadowMapPass,
     shading: ShadingPass,
     hard: HardShadow,
+    comparison_samplers: ComparisonSamplers,
+    pcf: PercentageCloserFiltering,
+    pcss: PercentageCloserSoftShadows,
     pvm: PenumbraVolumeMaps,
     reference: ReferenceShadows,
     pvmf: PenumbraVolumeMaskFiltering,
@@ -119,8 +124,15 @@ impl Renderer {
                 PenumbraVolumeMaskFiltering::new(device),
             ))
         })?;
+        let (comparison_samplers, pcf, pcss) = ctx.scoped(|| {
+            Ok((
+                ComparisonSamplers::new(device),
+                PercentageCloserFiltering::new(device),
+                PercentageCloserSoftShadows::new(device),
+            ))
+        })?;
         let silhouettes = SilhouetteCache::default();
-        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, pvm, reference, pvmf, silhouettes })
+        Ok(Self { ctx, use_timestamps, gbuffer, shadow_map, shading, hard, comparison_samplers, pcf, pcss, pvm, reference, pvmf, silhouettes })
     }
 
     pub fn adapter(&self) -> &AdapterSummary {
@@ -213,7 +225,7 @@ impl Renderer {
             ("degenerate_triangles".to_owned(), prepared.degenerate_triangles as i64),
         ]);
         let mut intermediates: Vec<Intermediate<'_>> = Vec::new();
-        // Pass 1 of `hard` and `pvm`: the shadow map from the light centre.
+        // Pass 1 of every method but `reference`: the shadow map from the light centre.
         let settings = method.shadow_map();
         let centre_map = !matches!(method, MethodConfig::Reference(_));
         let shadow_map = ShadowMapPass::create_map(device, if centre_map { settings.map_size } else { 1 });
@@ -228,7 +240,8 @@ impl Renderer {
         let light = (scene.light.center, scene.light.radius);
         let pvm_frame;
         let pvmf_frame;
-        // A method's atomic counters and their stat names.
+        let pcss_frame;
+        // A method's atomic counters and the stats they fill, in order.
         let mut counters: Option<(&wgpu::Buffer, &[&str])> = None;
         match method {
             MethodConfig::Hard(params) => {
@@ -237,6 +250,25 @@ impl Renderer {
                         device, encoder, params, &gbuffer, &shadow_map, frustum, scene.light.center, &visibility, ts,
                     )
                 })?;
+            }
+            MethodConfig::Pcf(params) => {
+                profiler.pass("visibility", |encoder, ts| {
+                    self.pcf.record_visibility(
+                        device, encoder, params, &self.comparison_samplers, &gbuffer, &shadow_map, frustum, scene.light.center, &visibility, ts,
+                    )
+                })?;
+            }
+            MethodConfig::Pcss(params) => {
+                let mut recorded = None;
+                profiler.pass("visibility", |encoder, ts| {
+                    recorded = Some(self.pcss.record_visibility(
+                        device, encoder, params, &self.comparison_samplers, &gbuffer, &shadow_map, frustum, light, &visibility, ts,
+                    ));
+                })?;
+                pcss_frame = recorded.expect("the pass ran");
+                counters = Some((&pcss_frame.counters, crate::methods::pcss::COUNTER_NAMES));
+                intermediates.push(Intermediate::color("pcss_penumbra_width", &pcss_frame.penumbra_width, 1));
+                intermediates.push(Intermediate::color("pcss_blocker_depth", &pcss_frame.blocker_depth, 1));
             }
             MethodConfig::Reference(params) => {
                 let l = glam::Vec3::from(light.0).as_dvec3();
@@ -285,7 +317,7 @@ impl Renderer {
                 pvmf_frame = built.expect("the pass ran")?;
                 profiler.pass("estimation", |encoder, ts| {
                     self.pvmf.record_estimate(
-                        device, encoder, params, &pvmf_frame, &gbuffer, &shadow_map, frustum, light, &visibility, ts,
+                        device, encoder, params, &self.comparison_samplers, &pvmf_frame, &gbuffer, &shadow_map, frustum, light, &visibility, ts,
                     )
                 })?;
                 if pvmf_frame.raw.is_some() {

@@ -28,6 +28,14 @@ pub fn hard() -> String {
     compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/hard.wgsl")])
 }
 
+pub fn pcf() -> String {
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF, include_str!("methods/pcf.wgsl")])
+}
+
+pub fn pcss() -> String {
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF, include_str!("methods/pcss.wgsl")])
+}
+
 pub fn reference() -> String {
     compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/reference.wgsl")])
 }
@@ -72,6 +80,16 @@ pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
             "pcf_taps",
             compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF]),
             &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "shaders/pcf.wgsl"],
+        ),
+        (
+            "pcf",
+            pcf(),
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "shaders/pcf.wgsl", "methods/pcf.wgsl"],
+        ),
+        (
+            "pcss",
+            pcss(),
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "shaders/pcf.wgsl", "methods/pcss.wgsl"],
         ),
         ("pvm_volumes", pvm_volumes(), &["methods/pvm_volumes.wgsl"]),
         (

@@ -6,12 +6,16 @@ use std::collections::BTreeMap;
 use crate::error::{Error, Result};
 
 pub mod hard;
+pub mod pcf;
+pub mod pcss;
 pub mod pvm;
 pub mod pvmf;
 pub mod reference;
 pub mod silhouettes;
 
 pub use hard::{BiasMode, HardParams, ShadowMapSettings};
+pub use pcf::PcfParams;
+pub use pcss::PcssParams;
 pub use pvm::PvmParams;
 pub use pvmf::PvmfParams;
 pub use reference::ReferenceParams;
@@ -39,8 +43,8 @@ impl ParamValue {
 /// Every method name SPEC section 4 defines, and whether it is implemented.
 pub const METHODS: &[(&str, bool)] = &[
     ("hard", true),
-    ("pcf", false),
-    ("pcss", false),
+    ("pcf", true),
+    ("pcss", true),
     ("reference", true),
     ("adaptive", false),
     ("pvm", true),
@@ -53,6 +57,8 @@ pub const METHODS: &[(&str, bool)] = &[
 #[derive(Debug, Clone, PartialEq)]
 pub enum MethodConfig {
     Hard(HardParams),
+    Pcf(PcfParams),
+    Pcss(PcssParams),
     Pvm(PvmParams),
     Pvmf(PvmfParams),
     Reference(ReferenceParams),
@@ -63,6 +69,8 @@ impl MethodConfig {
         let mut reader = ParamReader::new(method, params);
         let config = match method {
             "hard" => MethodConfig::Hard(HardParams::read(&mut reader)?),
+            "pcf" => MethodConfig::Pcf(PcfParams::read(&mut reader)?),
+            "pcss" => MethodConfig::Pcss(PcssParams::read(&mut reader)?),
             "pvm" => MethodConfig::Pvm(PvmParams::read(&mut reader)?),
             "pvmf" => MethodConfig::Pvmf(PvmfParams::read(&mut reader)?),
             "reference" => MethodConfig::Reference(ReferenceParams::read(&mut reader)?),
@@ -84,6 +92,8 @@ impl MethodConfig {
     pub fn name(&self) -> &'static str {
         match self {
             MethodConfig::Hard(_) => "hard",
+            MethodConfig::Pcf(_) => "pcf",
+            MethodConfig::Pcss(_) => "pcss",
             MethodConfig::Pvm(_) => "pvm",
             MethodConfig::Pvmf(_) => "pvmf",
             MethodConfig::Reference(_) => "reference",
@@ -94,6 +104,8 @@ impl MethodConfig {
     pub fn effective_params(&self) -> BTreeMap<String, ParamValue> {
         match self {
             MethodConfig::Hard(p) => p.effective(),
+            MethodConfig::Pcf(p) => p.effective(),
+            MethodConfig::Pcss(p) => p.effective(),
             MethodConfig::Pvm(p) => p.effective(),
             MethodConfig::Pvmf(p) => p.effective(),
             MethodConfig::Reference(p) => p.effective(),
@@ -105,6 +117,8 @@ impl MethodConfig {
     pub fn shadow_map(&self) -> &ShadowMapSettings {
         match self {
             MethodConfig::Hard(p) => p,
+            MethodConfig::Pcf(p) => &p.shadow,
+            MethodConfig::Pcss(p) => &p.shadow,
             MethodConfig::Pvm(p) => &p.shadow,
             MethodConfig::Pvmf(p) => &p.shadow,
             MethodConfig::Reference(p) => &p.shadow,

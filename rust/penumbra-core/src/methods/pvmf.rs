@@ -28,6 +28,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{layout, PassTimestamps};
 use crate::light_frustum::LightFrustum;
 use crate::methods::hard::ShadowMapSettings;
+use crate::methods::pcf::{ComparisonSamplers, Filter};
 use crate::methods::silhouettes::{OpenEdges, SilhouetteCache, SilhouetteEdge};
 use crate::methods::{ParamReader, ParamValue};
 use crate::passes::gbuffer::GBuffer;
@@ -70,8 +71,8 @@ pub struct PvmfParams {
     pub n_blur: u32,
     /// Fixes the filter's jitter.
     pub seed: u64,
-    /// Hardware 2x2 bilinear comparison per tap (5.5), else the nearest texel.
-    pub bilinear: bool,
+    /// Hardware 2x2 bilinear comparison per tap (5.5), or the nearest texel.
+    pub filter: Filter,
     pub offsets: Offsets,
     pub kernel: Kernel,
     /// Filter pixels that fail the shadow-map test outside every volume (5.2).
@@ -93,7 +94,7 @@ impl PvmfParams {
             n_pcf: r.int("n_pcf", 7, 1, 32)? as u32,
             n_blur: r.int("n_blur", 12, 0, 64)? as u32,
             seed: r.int("seed", 0, 0, u32::MAX as i64)? as u64,
-            bilinear: r.choice("filter", "bilinear", &["bilinear", "nearest"])? == "bilinear",
+            filter: Filter::read(r)?,
             offsets: match r.choice("offsets", "unit", &["unit", "radius"])? {
                 "radius" => Offsets::Radius,
                 _ => Offsets::Unit,
@@ -115,7 +116,7 @@ impl PvmfParams {
         out.insert("n_pcf".into(), ParamValue::Int(self.n_pcf as i64));
         out.insert("n_blur".into(), ParamValue::Int(self.n_blur as i64));
         out.insert("seed".into(), ParamValue::Int(self.seed as i64));
-        out.insert("filter".into(), s(if self.bilinear { "bilinear" } else { "nearest" }));
+        out.insert("filter".into(), s(self.filter.name()));
         out.insert("offsets".into(), s(if self.offsets == Offsets::Unit { "unit" } else { "radius" }));
         out.insert("kernel".into(), s(if self.kernel == Kernel::Square { "square" } else { "disk" }));
         out.insert("umbra".into(), s(if self.filter_umbra { "filter" } else { "skip" }));
@@ -235,8 +236,6 @@ pub struct PenumbraVolumeMaskFiltering {
     estimate_layout: wgpu::BindGroupLayout,
     blur_pipeline: wgpu::ComputePipeline,
     blur_layout: wgpu::BindGroupLayout,
-    bilinear: wgpu::Sampler,
-    nearest: wgpu::Sampler,
 }
 
 /// What one PVMF render produced besides visibility.
@@ -318,8 +317,6 @@ impl PenumbraVolumeMaskFiltering {
             estimate_layout,
             blur_pipeline,
             blur_layout,
-            bilinear: layout::create_comparison_sampler(device, true),
-            nearest: layout::create_comparison_sampler(device, false),
         }
     }
 
@@ -419,6 +416,7 @@ impl PenumbraVolumeMaskFiltering {
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         params: &PvmfParams,
+        samplers: &ComparisonSamplers,
         frame: &PvmfFrame,
         gbuffer: &GBuffer,
         shadow_map: &wgpu::Texture,
@@ -452,7 +450,7 @@ impl PenumbraVolumeMaskFiltering {
                 wgpu::BindingResource::TextureView(&views[0]),
                 wgpu::BindingResource::TextureView(&views[1]),
                 wgpu::BindingResource::TextureView(&views[2]),
-                wgpu::BindingResource::Sampler(if params.bilinear { &self.bilinear } else { &self.nearest }),
+                wgpu::BindingResource::Sampler(samplers.get(params.filter)),
                 test.as_entire_binding(),
                 settings.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&views[3]),

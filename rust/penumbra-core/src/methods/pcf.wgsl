@@ -1,0 +1,59 @@
+// Method `pcf`: percentage-closer filtering with a fixed kernel (Reeves et
+// al. 1987; Cournia 3.4): the mean of the shadow-map tests over a square of
+// `kernel` texels around the receiver, from an n x n jittered grid of taps
+// (shaders/pcf.wgsl).
+
+struct PcfKernel {
+    // Kernel width in map texels.
+    kernel: f32,
+    // Taps per axis.
+    samples: u32,
+    seed: u32,
+    // 1 when the comparison sampler is the nearest-texel one.
+    nearest: u32,
+};
+
+@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
+@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
+@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(3) var cmp_sampler: sampler_comparison;
+@group(0) @binding(4) var<uniform> shadow: ShadowTest;
+@group(0) @binding(5) var<uniform> pcf: PcfKernel;
+@group(0) @binding(6) var visibility_out: texture_storage_2d<r32float, write>;
+
+fn pcf_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    // Centre below the surface's horizon: the surface itself hides it (as `hard`).
+    if (light_cosine(shadow, p, n) <= 0.0) {
+        return 0.0;
+    }
+    // A zero-width nearest kernel reads one texel: Williams' test, with the
+    // bias of `hard` (the receiver plane only stands in for the slope term
+    // where taps leave the receiver's texel).
+    if (pcf.kernel == 0.0 && pcf.nearest == 1u) {
+        return shadow_test_visibility(shadow, shadow_map, p, n);
+    }
+    let r = pcf_receiver(shadow, p, n);
+    let count = pcf.samples * pcf.samples;
+    var sum = 0.0;
+    for (var i = 0u; i < count; i++) {
+        let offset = grid_tap(i, pcf.samples, jitter2(px, pcf.seed, i)) * pcf.kernel;
+        sum += pcf_tap(shadow, shadow_map, cmp_sampler, r, r.coords + offset);
+    }
+    // count >= 1 (samples >= 1 is checked on the CPU).
+    return sum / f32(count);
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(gbuffer_normal);
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let px = vec2<i32>(id.xy);
+    let nt = textureLoad(gbuffer_normal, px, 0);
+    var v = 0.0;
+    if (!is_background(nt)) {
+        v = pcf_visibility(id.xy, textureLoad(gbuffer_position, px, 0).xyz, nt.xyz);
+    }
+    textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));
+}

@@ -1,0 +1,169 @@
+// Method `pcss`: percentage-closer soft shadows (Fernando 2005; surveyed in
+// Cournia ch. 3, and the basis of PVMF's filter, 5.2). Per pixel:
+//   1. blocker search: the mean light depth d_b of the map texels, in a region
+//      around the receiver, that are nearer the light than the receiver's plane;
+//      no blocker found: fully lit (the paper's early exit);
+//   2. penumbra estimate: w_p = (d_r - d_b) w_light / d_b (parallel planes);
+//   3. percentage-closer filtering over a disk of that width (shaders/pcf.wgsl).
+// Sizes are in map texels. Taps are disk samples (the light is a disk as seen
+// from the receiver): a jittered n x n grid through Shirley and Chiu's map, or
+// the first n x n points of a fixed Poisson-disk set; both rotated per pixel.
+
+struct PcssSampling {
+    // Taps per axis of the blocker search and of the filter.
+    blocker_samples: u32,
+    filter_samples: u32,
+    seed: u32,
+    // 1: Poisson-disk taps; 0: jittered grid.
+    poisson: u32,
+};
+
+struct PcssPixel {
+    v: f32,
+    // Estimated penumbra width w_p in map texels (the filter's diameter), and
+    // mean blocker depth d_b (world units); 0 where not computed.
+    width: f32,
+    blocker: f32,
+};
+
+@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
+@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
+@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(3) var cmp_sampler: sampler_comparison;
+// center.w: the light's radius.
+@group(0) @binding(4) var<uniform> shadow: ShadowTest;
+@group(0) @binding(5) var<uniform> pcss: PcssSampling;
+@group(0) @binding(6) var visibility_out: texture_storage_2d<r32float, write>;
+@group(0) @binding(7) var width_out: texture_storage_2d<r32float, write>;
+@group(0) @binding(8) var blocker_out: texture_storage_2d<r32float, write>;
+// [0]: pixels that ran the blocker search; [1]: pixels that ran the filter.
+@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>, 2>;
+
+// Mitchell's best-candidate points in the unit disk (scripts/poisson_disk.py):
+// every prefix is itself well spread, so the first n x n serve for any n <= 8.
+var<private> poisson_disk: array<vec2<f32>, 64> = array<vec2<f32>, 64>(
+    vec2<f32>(-0.01525, 0.05641), vec2<f32>(-0.37572, -0.91269), vec2<f32>(0.96134, -0.12786), vec2<f32>(0.35693, 0.90836),
+    vec2<f32>(-0.97142, -0.16167), vec2<f32>(-0.58623, 0.70453), vec2<f32>(0.49446, -0.81101), vec2<f32>(0.81751, 0.43372),
+    vec2<f32>(0.07565, -0.47412), vec2<f32>(-0.41982, -0.28751), vec2<f32>(-0.07516, 0.58037), vec2<f32>(-0.60757, 0.20637),
+    vec2<f32>(0.48518, -0.16165), vec2<f32>(-0.77369, -0.55342), vec2<f32>(0.32297, 0.36064), vec2<f32>(0.07910, -0.98709),
+    vec2<f32>(0.78490, -0.51630), vec2<f32>(-0.17581, 0.97523), vec2<f32>(0.66464, 0.73767), vec2<f32>(-0.83367, 0.47486),
+    vec2<f32>(-0.24005, -0.59888), vec2<f32>(-0.28885, 0.31969), vec2<f32>(0.67067, 0.10645), vec2<f32>(-0.94463, 0.16044),
+    vec2<f32>(0.46048, -0.46468), vec2<f32>(0.98254, 0.17887), vec2<f32>(-0.34566, 0.02928), vec2<f32>(-0.08070, -0.23497),
+    vec2<f32>(-0.64842, -0.09897), vec2<f32>(0.20420, 0.65328), vec2<f32>(0.26694, 0.08200), vec2<f32>(0.20576, -0.18768),
+    vec2<f32>(0.20094, -0.72497), vec2<f32>(0.05050, 0.32550), vec2<f32>(-0.62489, -0.77861), vec2<f32>(0.08161, 0.90137),
+    vec2<f32>(0.56253, 0.49408), vec2<f32>(-0.32178, 0.67348), vec2<f32>(-0.52007, 0.45287), vec2<f32>(-0.50790, -0.53182),
+    vec2<f32>(0.73423, -0.23414), vec2<f32>(-0.13409, -0.85232), vec2<f32>(-0.77529, -0.30649), vec2<f32>(-0.39952, 0.90800),
+    vec2<f32>(0.43416, 0.68866), vec2<f32>(0.62564, -0.64784), vec2<f32>(0.48597, 0.20788), vec2<f32>(0.30465, -0.92901),
+    vec2<f32>(0.93431, -0.33132), vec2<f32>(-0.03575, -0.67033), vec2<f32>(-0.22175, -0.38258), vec2<f32>(-0.11139, 0.78015),
+    vec2<f32>(0.26684, -0.38783), vec2<f32>(-0.81787, 0.01321), vec2<f32>(-0.17354, -0.05859), vec2<f32>(-0.42631, -0.70825),
+    vec2<f32>(-0.18902, 0.15559), vec2<f32>(0.78863, -0.05173), vec2<f32>(0.38758, -0.64558), vec2<f32>(0.65045, 0.29445),
+    vec2<f32>(-0.59920, -0.36141), vec2<f32>(-0.79817, 0.28602), vec2<f32>(0.43949, 0.01575), vec2<f32>(0.62635, -0.38101),
+);
+
+// Stream offsets of jitter2's index, so that the two stages and the rotation
+// draw independent numbers (at most 32 x 32 taps per stage).
+const BLOCKER_STREAM: u32 = 0u;
+const FILTER_STREAM: u32 = 1024u;
+const ROTATION_STREAM: u32 = 2048u;
+
+// Tap i of n x n on the unit disk, rotated by the unit complex number `rot`.
+fn disk_tap(px: vec2<u32>, i: u32, n: u32, stream: u32, rot: vec2<f32>) -> vec2<f32> {
+    var s: vec2<f32>;
+    if (pcss.poisson == 1u) {
+        s = poisson_disk[i];
+    } else {
+        s = square_to_disk(grid_tap(i, n, jitter2(px, pcss.seed, stream + i)));
+    }
+    return vec2<f32>(rot.x * s.x - rot.y * s.y, rot.y * s.x + rot.x * s.y);
+}
+
+// World-unit light depth stored in the map at the texel under `c` (no comparison).
+fn texel_depth(c: vec2<f32>) -> f32 {
+    let size = vec2<i32>(textureDimensions(shadow_map));
+    let t = clamp(vec2<i32>(floor(c)), vec2<i32>(0), size - 1);
+    return textureLoad(shadow_map, t, 0) * shadow.light_space.depth.y;
+}
+
+fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
+    var out = PcssPixel(0.0, 0.0, 0.0);
+    // Centre below the surface's horizon: the surface itself hides it (as `hard`).
+    if (light_cosine(shadow, p, n) <= 0.0) {
+        return out;
+    }
+    let radius = shadow.center.w;
+    // A point light casts hard shadows: the test of `hard` (SPEC 7: skip the search).
+    if (radius == 0.0) {
+        out.v = shadow_test_visibility(shadow, shadow_map, p, n);
+        return out;
+    }
+    let ls = shadow.light_space;
+    let near = ls.depth.x;
+    let r = pcf_receiver(shadow, p, n);
+    let angle = 2.0 * PI * jitter2(px, pcss.seed, ROTATION_STREAM).x;
+    let rot = vec2<f32>(cos(angle), sin(angle));
+
+    // 1. Blocker search (Fernando 2005, step 1). Whatever hides part of the
+    // light from the receiver lies in the cone from the receiver to the light's
+    // disk, whose radius at depth z is radius (d_r - z) / d_r; its projection is
+    // widest at the near plane, where it is radius (d_r - near) / d_r world
+    // units: Fernando's w_light (d_r - z_near) / d_r. d_r > 0 (every receiver is
+    // in front of the light, frustum fit) and the texel size at near > 0.
+    atomicAdd(&counters[0], 1u);
+    let search = radius * max(r.depth - near, 0.0) / r.depth / light_texel_size(ls, near);
+    let nb = pcss.blocker_samples;
+    var blocker_sum = 0.0;
+    var blockers = 0u;
+    for (var i = 0u; i < nb * nb; i++) {
+        let c = r.coords + search * disk_tap(px, i, nb, BLOCKER_STREAM, rot);
+        let z = texel_depth(c);
+        if (z < plane_depth(shadow, r, c) - r.bias) {
+            blocker_sum += z;
+            blockers += 1u;
+        }
+    }
+    // The paper's early exit: no blocker, fully lit.
+    if (blockers == 0u) {
+        out.v = 1.0;
+        return out;
+    }
+    // blockers >= 1; every stored depth is at least near > 0 (the map covers
+    // only geometry beyond the fitted near plane), so d_b > 0.
+    let d_b = max(blocker_sum / f32(blockers), near);
+    out.blocker = d_b;
+
+    // 2. Penumbra estimate (Fernando 2005, step 2, parallel planes):
+    // w_p = (d_r - d_b) w_light / d_b, here as the radius on the receiver,
+    // radius (d_r - d_b) / d_b, then in texels of the map at the receiver's
+    // depth (r.texel > 0 as d_r > 0).
+    let filter_radius = radius * max(r.depth - d_b, 0.0) / d_b / r.texel;
+    out.width = 2.0 * filter_radius;
+
+    // 3. Percentage-closer filtering over that disk (step 3).
+    atomicAdd(&counters[1], 1u);
+    let nf = pcss.filter_samples;
+    var sum = 0.0;
+    for (var i = 0u; i < nf * nf; i++) {
+        let c = r.coords + filter_radius * disk_tap(px, i, nf, FILTER_STREAM, rot);
+        sum += pcf_tap(shadow, shadow_map, cmp_sampler, r, c);
+    }
+    // nf >= 1 (checked on the CPU).
+    out.v = sum / f32(nf * nf);
+    return out;
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(gbuffer_normal);
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let px = vec2<i32>(id.xy);
+    let nt = textureLoad(gbuffer_normal, px, 0);
+    var o = PcssPixel(0.0, 0.0, 0.0);
+    if (!is_background(nt)) {
+        o = pcss_visibility(id.xy, textureLoad(gbuffer_position, px, 0).xyz, nt.xyz);
+    }
+    textureStore(visibility_out, px, vec4<f32>(o.v, 0.0, 0.0, 0.0));
+    textureStore(width_out, px, vec4<f32>(o.width, 0.0, 0.0, 0.0));
+    textureStore(blocker_out, px, vec4<f32>(o.blocker, 0.0, 0.0, 0.0));
+}

@@ -1,0 +1,197 @@
+"""Methods `pcf` (Reeves et al. 1987) and `pcss` (Fernando 2005)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra.scenes import box, ground_slab
+from penumbra.transition import standing_edges, transition_width
+
+FILTERING = ["pcf", "pcss"]
+
+
+def penumbra_pixels(result: penumbra.RenderResult, receiver: int = 0) -> int:
+    v = result.visibility
+    return int(((v > 0.02) & (v < 0.98) & (result.object_id == receiver)).sum())
+
+
+def overhead_camera(size: int) -> penumbra.Camera:
+    """Looks straight down on `resting_box`'s shadow (it falls behind the box
+    from the scene's own camera): rows run along x, the top is -z."""
+    return penumbra.Camera(eye=(-0.8, 9.0, -0.8), target=(-0.8, 0.0, -0.8), up=(0, 0, -1), fov_y=20, width=size, height=size)
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory: pytest.TempPathFactory) -> Any:
+    return tmp_path_factory.mktemp("gt")
+
+
+@pytest.mark.parametrize("method", FILTERING)
+@pytest.mark.parametrize("name", penumbra.scenes.names())
+def test_every_scene_is_finite_bounded_and_seeded(renderer: penumbra.Renderer, name: str, method: str) -> None:
+    scene = penumbra.scenes.get(name, width=64, height=64)
+    a = renderer.render(scene, method, seed=1, intermediates=True)
+    for key, image in a.images.items():
+        assert np.isfinite(image).all(), key
+    assert a.visibility.min() >= 0 and a.visibility.max() <= 1
+    assert penumbra_pixels(a) > 0, "a soft edge somewhere on the ground"
+    np.testing.assert_array_equal(a.visibility, renderer.render(scene, method, seed=1).visibility)
+    assert not np.array_equal(a.visibility, renderer.render(scene, method, seed=2).visibility)
+    assert list(a.timings) == ["gbuffer", "shadow_map", "visibility", "shading", "readback"]
+
+
+def test_pcss_stats_and_intermediates(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get("overlapping_casters", width=64, height=64)
+    result = renderer.render(scene, "pcss", intermediates=True)
+    width, blocker = result["pcss_penumbra_width"], result["pcss_blocker_depth"]
+    assert width.shape == blocker.shape == (64, 64)
+    stats = result.stats
+    # Every geometry pixel facing the light centre searches (up to rounding at
+    # grazing angles); those that find a blocker filter.
+    to_light = np.asarray(scene.light.center) - result.position
+    facing = (result.object_id >= 0) & ((result.normal * to_light).sum(-1) > 0)
+    assert abs(stats["blocker_search_pixels"] - int(facing.sum())) <= 0.01 * facing.sum()
+    assert stats["filtered_pixels"] == int((blocker > 0).sum()) > 0
+    assert stats["filtered_pixels"] < stats["blocker_search_pixels"]
+    # Blockers lie between the light and the receiver, widths are non-negative.
+    assert (width >= 0).all() and (width[blocker == 0] == 0).all()
+    assert (blocker[blocker > 0] < result["shadow_map"].max()).all()
+
+
+@pytest.mark.parametrize("bias", ["slope", "second_depth", "none"])
+def test_zero_kernel_nearest_pcf_is_hard(renderer: penumbra.Renderer, bias: str) -> None:
+    for name in penumbra.scenes.names():
+        scene = penumbra.scenes.get(name, width=64, height=64)
+        hard = renderer.render(scene, "hard", bias=bias, map_size=512)
+        pcf = renderer.render(scene, "pcf", kernel=0, filter="nearest", bias=bias, map_size=512)
+        np.testing.assert_array_equal(pcf.visibility, hard.visibility)
+        # A nonzero kernel softens the same shadow.
+        assert penumbra_pixels(renderer.render(scene, "pcf", kernel=4, bias=bias, map_size=512)) > penumbra_pixels(hard)
+
+
+@pytest.mark.parametrize("filter", ["nearest", "bilinear"])
+def test_point_light_pcss_is_hard_without_a_search(renderer: penumbra.Renderer, filter: str) -> None:
+    for name in penumbra.scenes.names():
+        scene = penumbra.scenes.get(name, width=64, height=64, light_radius=0.0)
+        result = renderer.render(scene, "pcss", filter=filter)
+        np.testing.assert_array_equal(result.visibility, renderer.render(scene, "hard").visibility)
+        assert result.stats["blocker_search_pixels"] == 0 == result.stats["filtered_pixels"]
+
+
+def test_pcf_softens_with_the_kernel(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get("cube_on_plane", width=96, height=96)
+    counts = [penumbra_pixels(renderer.render(scene, "pcf", kernel=k, samples=8)) for k in (2.0, 8.0, 32.0)]
+    assert counts[0] < counts[1] < counts[2], counts
+
+
+@pytest.mark.parametrize("sampling", ["grid", "poisson"])
+def test_pcss_penumbra_widens_with_the_light_radius(renderer: penumbra.Renderer, sampling: str) -> None:
+    counts = []
+    for radius in (0.1, 0.4, 1.2):
+        scene = penumbra.scenes.get("cube_on_plane", width=96, height=96, light_radius=radius)
+        counts.append(penumbra_pixels(renderer.render(scene, "pcss", sampling=sampling)))
+    assert counts[0] < counts[1] < counts[2], counts
+
+
+def test_pcss_hardens_towards_the_contact(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get("resting_box")
+    camera = overhead_camera(128)
+    foot, corners = standing_edges(scene, 1)
+    near, far = 0.15, 0.75
+    for method, params in [("pcss", {}), ("pcss", {"sampling": "poisson"}), ("reference", {"n_samples": 64, "map_size": 1024})]:
+        result = renderer.render(scene, method, camera=camera, **params)
+        for corner in corners:
+            w_near, w_far = transition_width(result.visibility, result.position, result.object_id == 0, foot, corner, [near, far])
+            # Measured here (world units, the two edges): pcss grid 0.26, 0.33 near
+            # and 0.55, 0.56 far; poisson 0.28, 0.36 and 0.59, 0.62; reference
+            # 0.09, 0.09 and 0.49, 0.46. The exact width grows about linearly from
+            # 0 at the contact; PCSS's blocker average overestimates it near the
+            # contact, where the box's top is in the search region, hence 0.75.
+            assert 0.05 < w_near < 0.75 * w_far, (method, params, corner, w_near, w_far)
+
+
+def test_pcss_follows_the_light_over_parallel_planes(renderer: penumbra.Renderer) -> None:
+    # Fernando's estimate is exact for a planar blocker parallel to a planar
+    # receiver; a disk kernel over a straight edge then gives the disk-cut
+    # fraction. A long bar at height 2 over the ground: the middle columns.
+    bar = box((0.0, 2.0, 0.0), (8.0, 0.2, 3.0), object_id=1, name="bar")
+    light = penumbra.SphereLight((0.0, 6.0, 0.0), 0.8, intensity=60.0)
+    camera = penumbra.Camera(eye=(0.0, 5.0, 5.5), target=(0.0, 0.0, 2.0), fov_y=30, width=128, height=128)
+    scene = penumbra.Scene([ground_slab(), bar], light, camera)
+    reference = renderer.render(scene, "reference", n_samples=256)
+    columns = slice(48, 80)
+    gv = reference.visibility[:, columns]
+    region = (reference.object_id[:, columns] == 0) & (gv > 0.02) & (gv < 0.98)
+    assert region.sum() > 300
+    errors = {}
+    for method, params in [("hard", {}), ("pcss", {}), ("pcss", {"sampling": "poisson"})]:
+        result = renderer.render(scene, method, **params)
+        errors[(method, params.get("sampling"))] = float(np.sqrt(np.mean((result.visibility[:, columns] - gv)[region] ** 2)))
+    # Measured here: hard 0.282, pcss grid 0.055, poisson 0.037 (mostly tap
+    # noise of 36 taps: 144 give 0.049), against a 256-sample reference.
+    assert errors[("pcss", None)] < 0.09 and errors[("pcss", "poisson")] < 0.09, errors
+    assert errors[("hard", None)] > 0.2, errors
+    # The search finds the bar's top at light depth 6 - 2.1 = 3.9.
+    with_blocker = renderer.render(scene, "pcss", intermediates=True)
+    found = with_blocker["pcss_blocker_depth"][:, columns][region & (with_blocker["pcss_blocker_depth"][:, columns] > 0)]
+    np.testing.assert_allclose(np.median(found), 3.9, atol=0.02)
+
+
+def test_pcss_beats_hard_against_ground_truth(renderer: penumbra.Renderer, cache: Any) -> None:
+    pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
+    from penumbra import metrics
+
+    scene = penumbra.scenes.get(width=96, height=96)
+    gt = pm.ground_truth(scene, spp=256, cache_dir=cache)
+    hard = metrics.compare(renderer.render(scene, "hard"), gt)["visibility_rmse_penumbra"]
+    pcss = metrics.compare(renderer.render(scene, "pcss"), gt)["visibility_rmse_penumbra"]
+    pcf = metrics.compare(renderer.render(scene, "pcf"), gt)["visibility_rmse_penumbra"]
+    # Measured here: penumbra RMSE hard 0.276, pcf 0.261 (a 5-texel kernel
+    # barely softens), pcss 0.145; the README's method table has 256x256.
+    assert pcss < 0.6 * hard, (pcss, hard)
+    assert pcf < hard, (pcf, hard)
+
+
+@pytest.mark.parametrize(
+    "method, params, words",
+    [
+        ("pcf", {"kernel": -1.0}, "kernel.*\\[0, 256\\]"),
+        ("pcf", {"kernel": 300}, "kernel"),
+        ("pcf", {"kernel": "wide"}, "kernel.*number"),
+        ("pcf", {"samples": 0}, "samples.*\\[1, 32\\]"),
+        ("pcf", {"samples": 2.5}, "samples.*integer"),
+        ("pcf", {"filter": "cubic"}, "filter.*bilinear"),
+        ("pcf", {"seed": -1}, "seed"),
+        ("pcf", {"blocker_samples": 4}, "unknown parameter.*blocker_samples"),
+        ("pcss", {"blocker_samples": 33}, "blocker_samples"),
+        ("pcss", {"filter_samples": 0}, "filter_samples"),
+        ("pcss", {"filter_samples": True}, "filter_samples.*integer"),
+        ("pcss", {"sampling": "halton"}, "sampling.*grid"),
+        ("pcss", {"sampling": "poisson", "blocker_samples": 9}, "blocker_samples.*at most 8"),
+        ("pcss", {"seed": 2**32}, "seed"),
+        ("pcss", {"kernel": 5.0}, "unknown parameter.*kernel"),
+        ("pcss", {"map_size": 8}, "map_size"),
+    ],
+)
+def test_parameters_are_checked(renderer: penumbra.Renderer, method: str, params: dict[str, Any], words: str) -> None:
+    with pytest.raises(penumbra.ParameterError, match=words):
+        renderer.render(penumbra.scenes.get(width=8, height=8), method, **params)
+
+
+def test_effective_parameters_are_recorded(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get(width=8, height=8)
+    pcf = renderer.render(scene, "pcf").params
+    assert {k: pcf[k] for k in ("kernel", "samples", "seed", "filter")} == {"kernel": 5.0, "samples": 4, "seed": 0, "filter": "bilinear"}
+    pcss = renderer.render(scene, "pcss", sampling="poisson").params
+    assert {k: pcss[k] for k in ("blocker_samples", "filter_samples", "seed", "filter", "sampling")} == {
+        "blocker_samples": 4,
+        "filter_samples": 6,
+        "seed": 0,
+        "filter": "bilinear",
+        "sampling": "poisson",
+    }
+    assert pcss["map_size"] == 2048 and pcss["bias"] == "slope"
