@@ -68,6 +68,7 @@ def test_radius_zero_is_the_hard_shadow_with_no_work(renderer: penumbra.Renderer
     result = renderer.render(scene, "pvmf", bias=bias)
     np.testing.assert_array_equal(result.visibility, renderer.render(scene, "hard", bias=bias).visibility)
     assert result.stats["mask_quads"] == result.stats["filtered_pixels"] == result.stats["blurred_pixels"] == 0
+    assert "blur" not in result.timings
 
 
 def test_n_blur_zero_leaves_the_raw_estimate(renderer: penumbra.Renderer) -> None:

@@ -242,7 +242,8 @@ pub struct PenumbraVolumeMaskFiltering {
 pub struct PvmfFrame {
     pub mask_depth: wgpu::Texture,
     pub edge_distance: wgpu::Texture,
-    /// The raw estimate (the visibility texture itself when n_blur is 0).
+    /// The raw estimate (the visibility texture itself when nothing is blurred:
+    /// n_blur is 0 or the light a point).
     pub raw: Option<wgpu::Texture>,
     pub blur_mask: wgpu::Texture,
     pub filter_width: wgpu::Texture,
@@ -399,7 +400,8 @@ impl PenumbraVolumeMaskFiltering {
         Ok(PvmfFrame {
             mask_depth,
             edge_distance,
-            raw: (params.n_blur > 0).then(|| ShadingPass::create_visibility(device, size)),
+            // Nothing is masked for a point light: no blur either.
+            raw: (params.n_blur > 0 && r > 0.0).then(|| ShadingPass::create_visibility(device, size)),
             blur_mask: ShadingPass::create_visibility(device, size),
             filter_width: ShadingPass::create_visibility(device, size),
             counters,
