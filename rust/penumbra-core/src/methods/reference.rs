@@ -3,12 +3,25 @@
 //! reference that converges to the light's true visibility as `n_samples`
 //! grows.
 //!
-//! The samples are a stratified, jittered grid on the light's disk facing the
-//! scene (Herf 4.5.1): `n_samples` is rounded up to a full grid of
-//! `ceil(sqrt(n))` columns. Each sample gets its own fitted shadow map and the
-//! shadow-map test of `hard`, added with weight 1/n into one accumulation
-//! buffer (Schwarzler 3.4.2's accumulation variant): two passes per sample,
-//! one resolve. Samples below a receiver's horizon count as hidden, as in the
+//! The samples are a stratified, jittered grid (Herf 4.5.1; `n_samples` is
+//! rounded up to a full grid of `ceil(sqrt(n))` columns), placed by
+//! `sampling`:
+//!
+//! - `sphere` (default): on the part of the light's sphere that any point of
+//!   the scene can see, equal-area strata, each sample weighted per receiver
+//!   by the solid angle its patch subtends (Herf 4.1's form-factor weights,
+//!   without its equal-weight assumption): `cos(theta_s) / |p - s|^2`, zero
+//!   for the far side. The weighted mean is the solid-angle fraction of the
+//!   sphere that `p` sees, the ground truth's visibility, for every receiver.
+//! - `disk`: on the disk through the light's centre facing the scene, equal
+//!   weights (Herf 4.2, 4.5.1, as for a planar light). From a receiver off the
+//!   disk's axis the disk is an ellipse, not the sphere's circle, so this
+//!   converges to a slightly different visibility (measured in the README).
+//!
+//! Each sample gets its own fitted shadow map and the shadow-map test of
+//! `hard`, accumulated (weighted sum and sum of weights) into one buffer
+//! (Schwarzler 3.4.2's accumulation variant): two passes per sample, one
+//! resolve. Samples below a receiver's horizon count as hidden, as in the
 //! ground truth. A point light needs one sample.
 
 use std::collections::BTreeMap;
@@ -26,11 +39,30 @@ use crate::passes::shading::VISIBILITY_FORMAT;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::scene::PreparedScene;
 
+/// Where the light samples lie (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LightSampling {
+    Sphere,
+    Disk,
+}
+
+impl LightSampling {
+    pub const NAMES: [&'static str; 2] = ["sphere", "disk"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSampling::Sphere => "sphere",
+            LightSampling::Disk => "disk",
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReferenceParams {
     pub shadow: ShadowMapSettings,
     pub n_samples: u32,
     pub seed: u64,
+    pub sampling: LightSampling,
 }
 
 impl ReferenceParams {
@@ -39,6 +71,10 @@ impl ReferenceParams {
             shadow: ShadowMapSettings::read(r)?,
             n_samples: r.int("n_samples", 256, 1, 4096)? as u32,
             seed: r.int("seed", 0, 0, i64::MAX)? as u64,
+            sampling: match r.choice("sampling", "sphere", &LightSampling::NAMES)? {
+                "disk" => LightSampling::Disk,
+                _ => LightSampling::Sphere,
+            },
         })
     }
 
@@ -46,6 +82,7 @@ impl ReferenceParams {
         let mut out = self.shadow.effective();
         out.insert("n_samples".into(), ParamValue::Int(self.n_samples as i64));
         out.insert("seed".into(), ParamValue::Int(self.seed as i64));
+        out.insert("sampling".into(), ParamValue::Str(self.sampling.name().into()));
         out
     }
 }
@@ -79,6 +116,35 @@ fn concentric_disk(u: DVec2) -> DVec2 {
     DVec2::new(r * phi.cos(), r * phi.sin())
 }
 
+/// A stratified jittered grid of at least `n` points in the unit square
+/// (Herf 4.5.1): `ceil(sqrt(n))` columns, as many rows as needed.
+fn jittered_grid(n: u32, seed: u64) -> Vec<DVec2> {
+    let columns = (n as f64).sqrt().ceil().max(1.0) as u32;
+    let rows = n.div_ceil(columns);
+    let mut rng = SplitMix(seed ^ 0x005E_ED0F_9E37);
+    let mut out = Vec::with_capacity((columns * rows) as usize);
+    for j in 0..rows {
+        for i in 0..columns {
+            out.push(DVec2::new(
+                (i as f64 + rng.next_f64()) / columns as f64,
+                (j as f64 + rng.next_f64()) / rows as f64,
+            ));
+        }
+    }
+    out
+}
+
+/// One light sample: its position; for `sphere` sampling the sphere's outward
+/// unit normal there (None: equal weights); and its weight: 1/n for equal
+/// weights, else the inverse of the density the samples were drawn with
+/// (`sphere_samples`), which the shader multiplies by the solid-angle factor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightSample {
+    pub position: DVec3,
+    pub normal: Option<DVec3>,
+    pub weight: f64,
+}
+
 /// Stratified jittered points on the disk of `radius` around `center`
 /// perpendicular to `axis` (a unit vector towards the scene). A radius of 0
 /// gives the centre once.
@@ -86,22 +152,96 @@ pub fn light_samples(center: DVec3, radius: f64, axis: DVec3, n: u32, seed: u64)
     if radius == 0.0 {
         return vec![center];
     }
-    let columns = (n as f64).sqrt().ceil().max(1.0) as u32;
-    let rows = n.div_ceil(columns);
     let (e1, e2) = axis.any_orthonormal_pair();
-    let mut rng = SplitMix(seed ^ 0x005E_ED0F_9E37);
-    let mut out = Vec::with_capacity((columns * rows) as usize);
-    for j in 0..rows {
-        for i in 0..columns {
-            let u = DVec2::new(
-                (i as f64 + rng.next_f64()) / columns as f64,
-                (j as f64 + rng.next_f64()) / rows as f64,
-            );
+    jittered_grid(n, seed)
+        .into_iter()
+        .map(|u| {
             let d = concentric_disk(u) * radius;
-            out.push(center + e1 * d.x + e2 * d.y);
-        }
+            center + e1 * d.x + e2 * d.y
+        })
+        .collect()
+}
+
+/// Stratified jittered points on the light's sphere (`center`, `radius`) for
+/// receivers that see at most the cap around `axis` (unit, towards the scene)
+/// of polar angle `acos(cos_max)` (`visible_cap_cos`, at least a hemisphere),
+/// with their normals and weights. Two stratified sets, each through Shirley
+/// and Chiu's area-preserving concentric map of a jittered grid:
+///
+/// - about 7/8 of the samples cosine-distributed on the hemisphere facing the
+///   scene (the disk lifted onto it, Malley's method): for a receiver on the
+///   axis these are the `disk` samples, as well stratified;
+/// - about 1/8 uniform over the whole cap (Lambert's azimuthal map
+///   `z = 1 - rho^2 (1 - cos_max)`), for what off-axis receivers see beyond
+///   the hemisphere and so that no weight is unbounded near its rim.
+///
+/// Each sample's weight is 1 / (n_c p_c(s) + n_u p_u(s)), the balance
+/// heuristic over both sets (Veach's multi-sample estimator), with
+/// p_c = max(cos_a, 0) / pi and p_u = 1 / (2 pi (1 - cos_max)) per unit area
+/// of the unit sphere: the weighted sum of the solid-angle factors estimates
+/// the solid angle each receiver sees. A radius of 0 gives the centre once.
+pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: u32, seed: u64) -> Vec<LightSample> {
+    if radius == 0.0 {
+        return vec![LightSample { position: center, normal: None, weight: 1.0 }];
     }
-    out
+    let cos_max = cos_max.clamp(-1.0, 0.0);
+    let (e1, e2) = axis.any_orthonormal_pair();
+    let n_u = n.div_ceil(8).max(1);
+    let cosine = if n > n_u { jittered_grid(n - n_u, seed) } else { Vec::new() };
+    let uniform = jittered_grid(n_u, seed ^ 0xA5A5_5A5A);
+    let (count_c, count_u) = (cosine.len() as f64, uniform.len() as f64);
+    let frame = |d: DVec2, z: f64, scale: f64| (axis * z + (e1 * d.x + e2 * d.y) * scale).normalize();
+    let normals = cosine
+        .into_iter()
+        .map(|u| {
+            let d = concentric_disk(u);
+            // |d| <= 1 up to rounding; the lift is unit length by construction.
+            frame(d, (1.0 - d.length_squared()).max(0.0).sqrt(), 1.0)
+        })
+        .chain(uniform.into_iter().map(|u| {
+            let d = concentric_disk(u);
+            let z = 1.0 - d.length_squared().min(1.0) * (1.0 - cos_max);
+            // sin(theta)^2 = (1 - z)(1 + z) = rho^2 (1 - cos_max)(1 + z), and d / rho
+            // is the azimuth's unit vector: the tangential part is d times
+            // sqrt((1 - cos_max)(1 + z)), with no division (finite at the pole).
+            frame(d, z, ((1.0 - cos_max) * (1.0 + z)).max(0.0).sqrt())
+        }));
+    // 1 - cos_max >= 1 (the cap holds a hemisphere): p_u is finite.
+    let p_u = 1.0 / (std::f64::consts::TAU * (1.0 - cos_max));
+    normals
+        .map(|normal| {
+            let p_c = normal.dot(axis).max(0.0) / std::f64::consts::PI;
+            // count_u >= 1 and p_u > 0: the density is positive everywhere.
+            let density = count_c * p_c + count_u * p_u;
+            LightSample { position: center + normal * radius, normal: Some(normal), weight: 1.0 / density }
+        })
+        .collect()
+}
+
+/// The cosine of the polar angle (around `axis`, the direction from the light
+/// centre to the scene's bounding-sphere centre at distance `distance`) of
+/// the cap holding every point of the light that a point of the scene (its
+/// bounding sphere of radius `bound`) can see. A point `p` sees the points
+/// within `acos(r / |p - c|) < 90` degrees of the direction to it, and that
+/// direction is within `asin(bound / distance)` of `axis`: the cap's
+/// half-angle is at most 90 degrees plus that, the whole sphere when the
+/// light is inside the bounding sphere.
+pub fn visible_cap_cos(distance: f64, bound: f64) -> f64 {
+    if !(distance > bound) {
+        return -1.0;
+    }
+    let spread = (bound / distance).clamp(0.0, 1.0).asin();
+    (std::f64::consts::FRAC_PI_2 + spread).min(std::f64::consts::PI).cos()
+}
+
+/// Uniform layout of `SampleWeight` in `methods/reference.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct SampleWeightUniform {
+    /// The sphere's outward unit normal at the sample; w = 1 for solid-angle weights.
+    normal: [f32; 4],
+    /// The light's centre (xyz).
+    light_center: [f32; 4],
 }
 
 pub struct ReferenceShadows {
@@ -122,6 +262,7 @@ impl ReferenceShadows {
                 layout::uniform(3),
                 layout::storage_buffer_rw(4),
                 layout::storage_texture(5, VISIBILITY_FORMAT),
+                layout::uniform(6),
             ],
         );
         let module = crate::shaders::module(device, "reference::shader", crate::shaders::reference());
@@ -150,33 +291,56 @@ impl ReferenceShadows {
     ) -> Result<usize> {
         let (center, radius) = light;
         let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
-        let axis = (scene_center - center).try_normalize().unwrap_or(DVec3::NEG_Y);
-        let samples = light_samples(center, radius, axis, params.n_samples, params.seed);
+        let offset = scene_center - center;
+        let axis = offset.try_normalize().unwrap_or(DVec3::NEG_Y);
+        let samples = match params.sampling {
+            LightSampling::Disk => light_samples(center, radius, axis, params.n_samples, params.seed)
+                .into_iter()
+                .map(|position| LightSample { position, normal: None, weight: 0.0 })
+                .collect(),
+            LightSampling::Sphere => {
+                let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
+                let cos_max = visible_cap_cos(offset.length(), bound);
+                sphere_samples(center, radius, axis, cos_max, params.n_samples, params.seed)
+            }
+        };
         let points: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
         let (w, h) = gbuffer.size;
         let accumulated = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("reference::accumulated"),
-            size: (w as u64 * h as u64 * 4).max(4),
+            // Per pixel: the weighted sum of visibilities and the sum of weights.
+            size: (w as u64 * h as u64 * 8).max(8),
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
         let map = ShadowMapPass::create_map(device, params.shadow.map_size);
         let (map_view, visibility_view) = (layout::view(&map), layout::view(visibility));
-        let weight = 1.0 / samples.len() as f32;
+        let equal_weight = 1.0 / samples.len() as f64;
         let depth = params.shadow.bias.map_depth();
         let last = samples.len() - 1;
-        for (i, s) in samples.iter().enumerate() {
+        for (i, sample) in samples.iter().enumerate() {
+            let s = sample.position;
             let frustum = LightFrustum::fit(s.as_vec3(), points.iter().copied())?;
             let first = i == 0;
             shadow_pass.record_part(device, encoder, &map, &frustum, depth, vertices, timestamps, (first, false));
             let mut test = params.shadow.uniform(&frustum, s.as_vec3().to_array(), 0.0, 0);
-            test.set_center_w(weight);
+            test.set_center_w(if sample.normal.is_some() { sample.weight } else { equal_weight } as f32);
             let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("reference::sample_uniforms"),
                 contents: bytemuck::bytes_of(&test),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-            let bind_group = self.bind_group(device, gbuffer, &map_view, &uniforms, &accumulated, &visibility_view);
+            let normal = sample.normal.unwrap_or(DVec3::ZERO).as_vec3();
+            let weight_uniform = SampleWeightUniform {
+                normal: [normal.x, normal.y, normal.z, if sample.normal.is_some() { 1.0 } else { 0.0 }],
+                light_center: [center.x as f32, center.y as f32, center.z as f32, 0.0],
+            };
+            let weights = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("reference::sample_weight"),
+                contents: bytemuck::bytes_of(&weight_uniform),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let bind_group = self.bind_group(device, gbuffer, &map_view, (&uniforms, &weights), &accumulated, &visibility_view);
             layout::dispatch_per_pixel_writes(encoder, "reference::accumulate_pass", &self.accumulate, &bind_group, gbuffer.size, None);
             if i == last {
                 layout::dispatch_per_pixel_writes(
@@ -197,7 +361,7 @@ impl ReferenceShadows {
         device: &wgpu::Device,
         gbuffer: &GBuffer,
         map_view: &wgpu::TextureView,
-        uniforms: &wgpu::Buffer,
+        (uniforms, weights): (&wgpu::Buffer, &wgpu::Buffer),
         accumulated: &wgpu::Buffer,
         visibility_view: &wgpu::TextureView,
     ) -> wgpu::BindGroup {
@@ -212,6 +376,7 @@ impl ReferenceShadows {
                 uniforms.as_entire_binding(),
                 accumulated.as_entire_binding(),
                 wgpu::BindingResource::TextureView(visibility_view),
+                weights.as_entire_binding(),
             ],
         )
     }
@@ -237,5 +402,73 @@ mod tests {
         assert_ne!(s, light_samples(c, 0.5, axis, 256, 8));
         assert_eq!(light_samples(c, 0.0, axis, 256, 7), vec![c]);
         assert_eq!(light_samples(c, 0.5, axis, 10, 7).len(), 12, "rounded up to a 4 x 3 grid");
+    }
+
+    #[test]
+    fn sphere_sample_weights_estimate_the_solid_angle_from_any_receiver() {
+        let (c, r) = (DVec3::new(1.0, 5.0, 0.0), 0.5);
+        let axis = DVec3::NEG_Y;
+        let (distance, bound) = (5.0, 3.0);
+        let cos_max = visible_cap_cos(distance, bound);
+        let s = sphere_samples(c, r, axis, cos_max, 1024, 3);
+        // 896 cosine samples rounded up to a 30 x 30 grid, 128 uniform ones to 12 x 11.
+        assert_eq!(s.len(), 900 + 132);
+        assert_eq!(s, sphere_samples(c, r, axis, cos_max, 1024, 3));
+        assert_ne!(s, sphere_samples(c, r, axis, cos_max, 1024, 4));
+        let (e1, _) = axis.any_orthonormal_pair();
+        for p in &s {
+            let n = p.normal.expect("weighted");
+            assert!((n.length() - 1.0).abs() < 1e-12);
+            assert!((p.position - (c + n * r)).length() < 1e-12);
+            assert!(n.dot(axis) >= cos_max - 1e-12, "outside the cap");
+            assert!(p.weight.is_finite() && p.weight > 0.0);
+        }
+        // Receivers on the axis and up to 35 degrees off it (inside the
+        // bounding sphere's cone, asin(3/5) = 37 degrees), near and far.
+        for (angle, d) in [(0.0f64, 5.0), (20.0, 5.0), (35.0, 4.0), (35.0, 1.5), (10.0, 20.0)] {
+            let (sin, cos) = angle.to_radians().sin_cos();
+            let p = c + (axis * cos + e1 * sin) * d;
+            // The shader's weight: density weight x cos(theta_s) / |p - s|^2 (times r^2 per unit area).
+            let f = |x: &LightSample| {
+                let to_p = p - x.position;
+                x.weight * x.normal.unwrap().dot(to_p).max(0.0) / to_p.length().powi(3) * r * r
+            };
+            let solid_angle: f64 = s.iter().map(f).sum();
+            let exact = std::f64::consts::TAU * (1.0 - (1.0 - (r / d).powi(2)).sqrt());
+            assert!((solid_angle / exact - 1.0).abs() < 0.01, "{angle} deg, d {d}: {solid_angle} vs {exact}");
+            // Half the visible light lies on either side of a plane through p and c.
+            let side = (p - c).cross(axis + e1).normalize();
+            let half: f64 = s.iter().filter(|x| (x.position - c).dot(side) > 0.0).map(f).sum();
+            assert!((half / solid_angle - 0.5).abs() < 0.01, "{angle} deg, d {d}: {}", half / solid_angle);
+        }
+        assert_eq!(sphere_samples(c, 0.0, axis, cos_max, 256, 3), vec![LightSample { position: c, normal: None, weight: 1.0 }]);
+    }
+
+    #[test]
+    fn the_visible_cap_holds_every_point_a_scene_point_sees() {
+        // Light inside the scene's bounding sphere: the whole sphere.
+        assert_eq!(visible_cap_cos(1.0, 2.0), -1.0);
+        assert_eq!(visible_cap_cos(2.0, 2.0), -1.0);
+        assert_eq!(visible_cap_cos(f64::NAN, 2.0), -1.0);
+        // A far scene: a little more than the facing hemisphere.
+        let far = visible_cap_cos(1000.0, 1.0);
+        assert!(far < 0.0 && far > -0.002, "{far}");
+        // Brute force: points p on the bounding sphere and the light points
+        // they see all fall in the cap.
+        let (c, r, d, bound) = (DVec3::ZERO, 0.3, 4.0, 2.0);
+        let axis = DVec3::NEG_Y;
+        let cos_max = visible_cap_cos(d, bound);
+        let all = sphere_samples(c, r, axis, -1.0, 4096, 1);
+        for k in 0..200 {
+            let t = k as f64 * 0.7;
+            let dir = DVec3::new(t.cos() * (t * 0.3).sin(), (t * 0.3).cos(), t.sin() * (t * 0.3).sin());
+            let p = c + axis * d + dir * bound;
+            for s in &all {
+                let n = s.normal.unwrap();
+                if n.dot(p - s.position) > 0.0 {
+                    assert!(n.dot(axis) >= cos_max - 1e-9, "{p} sees {n} outside the cap {cos_max}");
+                }
+            }
+        }
     }
 }
