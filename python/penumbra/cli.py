@@ -1,4 +1,4 @@
-"""The command line: ``penumbra render | compare | scenes | methods | info``."""
+"""The command line: ``penumbra render | compare | bench | scenes | methods | info``."""
 
 from __future__ import annotations
 
@@ -103,6 +103,13 @@ def build_parser() -> argparse.ArgumentParser:
     comp.add_argument("--json", help="also write the metrics to this JSON file")
     comp.add_argument("-o", "--output", default="compare.png", help="the comparison picture (PNG)")
     comp.set_defaults(run=_compare)
+
+    from penumbra import bench
+
+    bench_parser = sub.add_parser(
+        "bench", help="run time against error for every method, Mitsuba and reference as peers (see benchmarks/bench.toml)"
+    )
+    bench.build_parser(bench_parser).set_defaults(run=bench.run_from_args)
 
     sub.add_parser("scenes", help="list the built-in scenes").set_defaults(run=lambda a: print("\n".join(scenes.names())) or 0)
     sub.add_parser("methods", help="list the implemented methods").set_defaults(run=lambda a: print("\n".join(methods())) or 0)

@@ -1,0 +1,104 @@
+"""`penumbra bench`: the config, the Pareto and equal-error arithmetic, and
+the quick run end to end (the CI run of the benchmark)."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import pytest
+
+from penumbra import bench, cli
+from penumbra import mitsuba as pm
+from penumbra.errors import ParameterError
+
+CONFIG = Path(__file__).resolve().parents[1] / "benchmarks" / "bench.toml"
+
+
+def test_pareto_front_keeps_only_unbeaten_points_sorted_by_time() -> None:
+    points = [(10.0, 0.5), (1.0, 0.9), (5.0, 0.2), (7.0, 0.3), (5.0, 0.25), (20.0, 0.1), (30.0, 0.1)]
+    assert bench.pareto_front(points) == [1, 2, 5]
+    assert bench.pareto_front([]) == []
+
+
+def test_time_at_error_interpolates_log_log_and_marks_bounds() -> None:
+    # A peer whose error halves when its time quadruples: e = 0.4 (t / 1)^-0.5.
+    curve = [(1.0, 0.4), (4.0, 0.2), (16.0, 0.1), (8.0, 0.3)]  # (8, 0.3) is off the front
+    t, bound = bench.time_at_error(curve, 0.2 / math.sqrt(2))
+    assert bound == "=" and t == pytest.approx(8.0)
+    assert bench.time_at_error(curve, 0.2) == (pytest.approx(4.0), "=")
+    assert bench.time_at_error(curve, 0.5) == (1.0, "<=")
+    assert bench.time_at_error(curve, 0.05) == (16.0, ">=")
+    assert math.isnan(bench.time_at_error([], 0.1)[0])
+
+
+def test_grids_expand_to_their_product_without_repeats() -> None:
+    grids = [{"a": [1, 2], "b": "x"}, {}, {"a": 1, "b": "x"}]
+    assert bench.expand(grids) == [{"a": 1, "b": "x"}, {"a": 2, "b": "x"}, {}]
+    assert bench.label({}) == "default"
+    assert bench.label({"n_blur": 0, "kernel": "disk"}) == "kernel=disk n_blur=0"
+
+
+def test_the_repository_config_loads_full_and_quick() -> None:
+    full = bench.load_config(CONFIG)
+    quick = bench.load_config(CONFIG, quick=True)
+    assert full.name == "bench" and quick.name == "bench_quick"
+    assert len(full.scenes) == 4 and quick.scenes == ["sphere_on_plane"]
+    assert quick.size < full.size and quick.peers["mitsuba_spp"] and quick.peers["reference_samples"]
+    import penumbra
+
+    assert set(full.methods) == set(penumbra.methods()) - {"reference"}, "every method but the peer is benchmarked"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("scenes = ['sphere_on_plane']\nsize = 0\n", "'size' must be at least 1"),
+        ("scenes = ['sphere_on_plane']\nsizes = 3\n", "unknown key 'sizes'"),
+        ("scenes = 'sphere_on_plane'\n", "'scenes' must be a list"),
+        ("scenes = ['no_such_scene']\n", "unknown scenes ['no_such_scene']"),
+        ("scenes = ['sphere_on_plane']\n[methods]\nhard = 3\n", "methods.hard must be a table"),
+        ("scenes = [\n", "not valid TOML"),
+        ("scenes = ['sphere_on_plane']\n[quick]\nrepeats = 'two'\n", "[quick]: 'repeats' must be a int"),
+    ],
+)
+def test_bad_configs_name_the_problem(tmp_path: Path, text: str, message: str) -> None:
+    path = tmp_path / "c.toml"
+    path.write_text(text)
+    with pytest.raises(ParameterError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        bench.load_config(path, quick=True)
+
+
+def test_a_missing_config_is_a_clear_cli_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli.main(["bench", "--config", str(tmp_path / "none.toml")]) == 2
+    assert "cannot read the benchmark config" in capsys.readouterr().err
+
+
+@pytest.mark.gpu
+def test_quick_run_writes_every_output_and_its_numbers_hold(renderer: object, tmp_path: Path) -> None:
+    if not pm.variant().startswith("llvm"):
+        pytest.skip("visibility ground truth needs Mitsuba's llvm variant")
+    assert cli.main(["bench", "--quick", "--config", str(CONFIG), "--out", str(tmp_path)]) == 0
+    for name in ("results.csv", "pareto.png", "pareto.md", "ratios.md", "scaling.csv", "scaling.png", "machine.md"):
+        assert (tmp_path / name).stat().st_size > 0, name
+    with open(tmp_path / "results.csv") as f:
+        rows = list(csv.DictReader(f))
+    cfg = bench.load_config(CONFIG, quick=True)
+    assert {r["method"] for r in rows} == set(cfg.methods) | {"reference", "mitsuba"}
+    hard = [r for r in rows if r["method"] == "hard" and r["label"] == "default"]
+    assert len(hard) == 1 and float(hard[0]["time_over_hard"]) == 1.0
+    for r in rows:
+        assert float(r["total_ms"]) > 0 and 0 <= float(r[bench.ERROR]) < 1, r
+        assert float(r["noise_visibility_rmse_penumbra"]) >= 0
+    error = {(r["method"], r["label"]): float(r[bench.ERROR]) for r in rows}
+    # The peers converge: four times the samples, clearly less error (measured
+    # at 48 px: reference 0.118 -> 0.067, Mitsuba 0.157 -> 0.066).
+    assert error[("reference", "n_samples=16")] < 0.8 * error[("reference", "n_samples=4")]
+    assert error[("mitsuba", "spp=16")] < 0.8 * error[("mitsuba", "spp=4")]
+    ratios = (tmp_path / "ratios.md").read_text()
+    for method in cfg.methods:
+        assert f"| {method} |" in ratios
+    assert "time / Mitsuba at equal error" in ratios
+    machine = (tmp_path / "machine.md").read_text()
+    assert "commit:" in machine and "adapter:" in machine
