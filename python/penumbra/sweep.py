@@ -157,7 +157,8 @@ def _ground_truths(
     if ground_truth is None or ground_truth is False:
         return {}
     if ground_truth is True:
-        return {name: render_ground_truth(s, camera, spp=spp) for name, s in scenes.items()}
+        # With a second seed, as penumbra.compare: every metric gets its noise floor.
+        return {name: render_ground_truth(s, camera, spp=spp, noise_seed=1) for name, s in scenes.items()}
     if isinstance(ground_truth, GroundTruth):
         if len(scenes) != 1:
             raise ParameterError("one GroundTruth given for several scenes; pass a dict of scene name to GroundTruth")
@@ -202,7 +203,8 @@ def sweep(
     scene by scene, then method by method, then through the grid in order.
 
     ``ground_truth``: None; True to render Mitsuba ground truth of each scene
-    at ``ground_truth_spp`` (cached under ``$PENUMBRA_CACHE_DIR``); a
+    at ``ground_truth_spp``, with a second seed for the noise floor as
+    :func:`penumbra.compare` does (both cached under ``$PENUMBRA_CACHE_DIR``); a
     :class:`~penumbra.mitsuba.GroundTruth` for a single scene; or a dict of
     scene name to one. With it, every row has every metric of
     :func:`penumbra.metrics.compare`.
