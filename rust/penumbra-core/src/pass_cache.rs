@@ -47,7 +47,7 @@ impl PassKind {
     /// 2048-texel maps: G-buffers 36 bytes a pixel (9 MiB each), shadow maps
     /// 4 bytes a texel (16 MiB), PVM volume maps 36 bytes a texel (144 MiB),
     /// PVMF masks 8 bytes a texel (32 MiB), PVMF estimates 12 bytes a pixel
-    /// (3 MiB): at most about 300 MiB in all.
+    /// (3 MiB): at most about 250 MiB in all.
     pub fn capacity(self) -> usize {
         match self {
             // Two cameras (or image sizes) alternating.
