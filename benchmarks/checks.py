@@ -79,7 +79,7 @@ def small_sphere_lights(renderer: penumbra.Renderer) -> None:
 def timings() -> None:
     scene = penumbra.scenes.get(width=512, height=512)
     for timing in ("auto", "cpu"):
-        r = penumbra.Renderer(timing=timing)
+        r = penumbra.Renderer(timing=timing, pass_cache=False)
         for _ in range(3):
             result = r.render(scene)
         passes = ", ".join(f"{k} {v:.2f}" for k, v in result.timings.items())

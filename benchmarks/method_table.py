@@ -47,7 +47,8 @@ def main() -> None:
     parser.add_argument("--spp", type=int, default=1024)
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
-    renderer = penumbra.Renderer()
+    # No pass cache: the repeats are timed, so every pass must run each time.
+    renderer = penumbra.Renderer(pass_cache=False)
     print(f"adapter {renderer.adapter_info['name']}; {args.size}x{args.size}; ground truth Mitsuba {pm.variant()} at {args.spp} spp, noise from a second seed\n")
     print("| scene | method | params | vis. RMSE | vis. RMSE penumbra | max error | FLIP | radiance RMSE (rel.) | time / hard |")
     print("|---|---|---|---|---|---|---|---|---|")

@@ -95,13 +95,19 @@ def test_penumbra_widens_with_the_light_radius(renderer: penumbra.Renderer) -> N
 
 def test_stats_intermediates_and_caches(renderer: penumbra.Renderer) -> None:
     scene = penumbra.scenes.get("overlapping_casters", width=64, height=64)
+    renderer.clear_pass_cache()  # every pass runs, and is timed
     first = renderer.render(scene, "pvm", intermediates=True, map_size=512)
+    # The same render again reuses every pass before visibility from the pass
+    # cache; another map size rebuilds the volumes from cached silhouettes.
     again = renderer.render(scene, "pvm", map_size=512)
+    assert again.reused_passes == ["gbuffer", "penumbra_volumes", "shadow_map"]
+    resized = renderer.render(scene, "pvm", map_size=256)
+    assert resized.reused_passes == ["gbuffer"]
     for key in ("pvm_volume_depth", "pvm_edge0", "pvm_edge1", "pvm_in_volume", "shadow_map"):
         assert key in first.images
     assert first.images["pvm_edge0"].shape == (512, 512, 3)
     assert first.stats["pixels_in_volume"] == int(first["pvm_in_volume"].sum()) > 0
-    assert again.stats["silhouette_cache_hits"] == len(scene.meshes)
+    assert resized.stats["silhouette_cache_hits"] == len(scene.meshes)
     np.testing.assert_array_equal(first.visibility, again.visibility)
     assert list(first.timings) == ["gbuffer", "shadow_map", "penumbra_volumes", "visibility", "shading", "readback"]
     moved = scene.with_light(penumbra.SphereLight(scene.light.center + 0.1, scene.light.radius, intensity=scene.light.intensity))

@@ -34,6 +34,7 @@ def world_gradient(result: penumbra.RenderResult) -> np.ndarray:
 def test_every_scene_renders_with_its_passes_stats_and_intermediates(renderer: penumbra.Renderer) -> None:
     for name in penumbra.scenes.names():
         scene = penumbra.scenes.get(name, width=64, height=64)
+        renderer.clear_pass_cache()  # every pass runs, and is timed
         result = renderer.render(scene, "pvmf", intermediates=True, map_size=512)
         assert list(result.timings) == ["gbuffer", "shadow_map", "mask", "estimation", "blur", "shading", "readback"]
         for key in ("pvmf_mask_depth", "pvmf_edge_distance", "pvmf_visibility_raw", "pvmf_blur_mask", "pvmf_filter_width", "shadow_map"):

@@ -3,6 +3,7 @@
 Build a :class:`Scene` from numpy arrays or trimesh meshes (or take one from
 :mod:`penumbra.scenes`), render it with a :class:`Renderer` and a method
 name, and get linear float32 numpy arrays, per-pass timings and statistics back.
+:func:`sweep` renders grids of parameters into a pandas DataFrame.
 """
 
 from typing import Any
@@ -24,6 +25,7 @@ from penumbra.errors import (
 )
 from penumbra.render import Renderer, RenderResult, adapter_info, methods, write_image
 from penumbra.scene import Camera, Mesh, Scene, SphereLight
+from penumbra.sweep import sweep
 
 __all__ = [
     "__version__",
@@ -31,6 +33,7 @@ __all__ = [
     "scenes",
     "metrics",
     "compare",
+    "sweep",
     "Renderer",
     "RenderResult",
     "adapter_info",

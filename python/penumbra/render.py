@@ -84,6 +84,13 @@ class RenderResult:
         """Object id, int32 (H, W); -1 on background."""
         return self.images["object_id"]
 
+    @property
+    def reused_passes(self) -> list[str]:
+        """Passes whose cached outputs this render reused (they have no
+        entry in ``timings``); empty without a pass cache."""
+        prefix = "reused_"
+        return [k[len(prefix):] for k, v in self.stats.items() if k.startswith(prefix) and k != "reused_passes" and v]
+
     def __getitem__(self, name: str) -> np.ndarray:
         return self.images[name]
 
@@ -101,10 +108,35 @@ class Renderer:
 
     ``timing="auto"`` times passes with GPU timestamps where the adapter has
     them (CPU clocks otherwise); ``"cpu"`` forces CPU clocks around each pass.
+
+    ``pass_cache=True`` (the default) keeps the outputs of recent passes (the
+    G-buffer, the centre shadow map, PVM's volume map, PVMF's mask and
+    estimate), keyed by exactly the inputs each pass reads, and reuses them
+    when a render's inputs for that pass are unchanged: changing only PVMF's
+    ``n_blur`` reruns only the blur and shading. Results are bit-identical
+    with and without it. A reused pass does not appear in ``timings`` (it did
+    not run); ``stats["reused_passes"]`` counts them and
+    ``stats["reused_<pass>"]`` is 1 or 0 for each cacheable pass of the
+    method. A few entries per pass kind are kept (see the README's "Sweeps").
+    ``pass_cache=False`` runs every pass of every render from scratch: use it
+    to time repeated renders.
     """
 
-    def __init__(self, timing: str = "auto") -> None:
-        self._core = _core.Renderer(timing)
+    def __init__(self, timing: str = "auto", pass_cache: bool = True) -> None:
+        self._core = _core.Renderer(timing, bool(pass_cache))
+
+    @property
+    def pass_cache(self) -> bool:
+        """Whether renders reuse cached pass outputs."""
+        return self._core.pass_cache
+
+    def pass_cache_entries(self) -> dict[str, int]:
+        """Entries the pass cache holds, per pass kind."""
+        return self._core.pass_cache_entries()
+
+    def clear_pass_cache(self) -> None:
+        """Drops every cached pass output (and the GPU memory it holds)."""
+        self._core.clear_pass_cache()
 
     @property
     def adapter_info(self) -> dict[str, Any]:

@@ -147,8 +147,8 @@ struct Renderer {
 #[pymethods]
 impl Renderer {
     #[new]
-    #[pyo3(signature = (timing = "auto"))]
-    fn new(py: Python<'_>, timing: &str) -> PyResult<Self> {
+    #[pyo3(signature = (timing = "auto", pass_cache = true))]
+    fn new(py: Python<'_>, timing: &str, pass_cache: bool) -> PyResult<Self> {
         let use_timestamps = match timing {
             "auto" => true,
             "cpu" => false,
@@ -158,8 +158,27 @@ impl Renderer {
                 ))))
             }
         };
-        let inner = py.detach(|| core::Renderer::new(use_timestamps)).map_err(to_py)?;
+        let inner = py.detach(|| core::Renderer::with_pass_cache(use_timestamps, pass_cache)).map_err(to_py)?;
         Ok(Self { inner })
+    }
+
+    #[getter]
+    fn pass_cache(&self) -> bool {
+        self.inner.pass_cache_enabled()
+    }
+
+    /// Entries the pass cache holds, per pass kind.
+    fn pass_cache_entries<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (name, n) in self.inner.pass_cache_entries() {
+            d.set_item(name, n)?;
+        }
+        Ok(d)
+    }
+
+    /// Drops every cached pass output.
+    fn clear_pass_cache(&self) {
+        self.inner.clear_pass_cache();
     }
 
     fn adapter_info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {

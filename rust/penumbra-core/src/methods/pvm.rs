@@ -28,6 +28,7 @@ use crate::methods::{ParamReader, ParamValue};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::shading::VISIBILITY_FORMAT;
 use crate::scene::PreparedScene;
+use crate::pass_cache::PassKey;
 pub use crate::methods::silhouettes::{silhouette, OpenEdges, SilhouetteCache, SilhouetteEdge};
 
 pub const EDGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -193,15 +194,42 @@ pub struct PenumbraVolumeMaps {
     visibility_layout: wgpu::BindGroupLayout,
 }
 
-/// What one PVM render produced besides visibility.
-pub struct PvmFrame {
+/// The penumbra volume map (pass 2): what the renderer's pass cache keeps.
+pub struct PvmVolumes {
     pub volume_depth: wgpu::Texture,
     pub edge0: wgpu::Texture,
     pub edge1: wgpu::Texture,
+    pub stats: VolumeStats,
+}
+
+/// What one PVM render produced besides visibility: the volume map (built
+/// now or reused) and this frame's membership image and counter.
+pub struct PvmFrame {
+    pub volumes: std::sync::Arc<PvmVolumes>,
     pub membership: wgpu::Texture,
     pub counter: wgpu::Buffer,
-    pub stats: VolumeStats,
-    pub cache_hits: usize,
+}
+
+/// What pass 2 reads besides the geometry: the light, the frustum, the map
+/// size and `open_edges` (appended to the pass-cache key).
+pub fn volumes_key(params: &PvmParams, frustum: &LightFrustum, (l, r): (DVec3, f64), key: &mut PassKey) {
+    key.f64s(&l.to_array())
+        .f64s(&[r])
+        .bytes(params.open_edges.name().as_bytes())
+        .frustum(frustum)
+        .u32(params.shadow.map_size);
+}
+
+impl PvmFrame {
+    pub fn new(device: &wgpu::Device, volumes: std::sync::Arc<PvmVolumes>, size: (u32, u32)) -> Self {
+        let membership = crate::passes::shading::ShadingPass::create_visibility(device, size);
+        let counter = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("pvm::pixels_in_volume"),
+            contents: &[0u8; 4],
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+        Self { volumes, membership, counter }
+    }
 }
 
 
@@ -257,7 +285,9 @@ impl PenumbraVolumeMaps {
         }
     }
 
-    /// Pass 2: builds and renders the penumbra volume map.
+    /// Pass 2: builds and renders the penumbra volume map; also returns the
+    /// silhouette cache hits. It reads the geometry, the frustum, the light,
+    /// `map_size` and `open_edges` (the renderer's pass-cache key).
     #[allow(clippy::too_many_arguments)]
     pub fn record_volumes(
         &self,
@@ -268,9 +298,8 @@ impl PenumbraVolumeMaps {
         scene: &PreparedScene,
         frustum: &LightFrustum,
         light: (DVec3, f64),
-        size: (u32, u32),
         timestamps: Option<PassTimestamps<'_>>,
-    ) -> Result<PvmFrame> {
+    ) -> Result<(PvmVolumes, usize)> {
         let (l, r) = light;
         let map = params.shadow.map_size;
         let (mut stats, mut cache_hits, vertices) = (VolumeStats::default(), 0, Vec::new());
@@ -291,12 +320,6 @@ impl PenumbraVolumeMaps {
         let edge_usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let edge0 = layout::create_texture(device, "pvm::edge0_map", (map, map), EDGE_FORMAT, edge_usage);
         let edge1 = layout::create_texture(device, "pvm::edge1_map", (map, map), EDGE_FORMAT, edge_usage);
-        let membership = crate::passes::shading::ShadingPass::create_visibility(device, size);
-        let counter = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvm::pixels_in_volume"),
-            contents: &[0u8; 4],
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("pvm::volume_uniforms"),
             contents: bytemuck::bytes_of(&crate::passes::shadow_map::shadow_uniforms(frustum)),
@@ -332,7 +355,7 @@ impl PenumbraVolumeMaps {
             pass.draw(0..vertices.len() as u32, 0..1);
         }
         drop(pass);
-        Ok(PvmFrame { volume_depth, edge0, edge1, membership, counter, stats, cache_hits })
+        Ok((PvmVolumes { volume_depth, edge0, edge1, stats }, cache_hits))
     }
 
     /// Pass 3: visibility per camera pixel.
@@ -356,7 +379,8 @@ impl PenumbraVolumeMaps {
             contents: bytemuck::bytes_of(&params.shadow.uniform(frustum, light.0, light.1, flags)),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let views = [shadow_map, &frame.volume_depth, &frame.edge0, &frame.edge1, visibility, &frame.membership].map(layout::view);
+        let v = &frame.volumes;
+        let views = [shadow_map, &v.volume_depth, &v.edge0, &v.edge1, visibility, &frame.membership].map(layout::view);
         let bind_group = layout::bind_group(
             device,
             "pvm::visibility_bind_group",

@@ -27,7 +27,8 @@ use wgpu::util::DeviceExt;
 use crate::error::{Error, Result};
 use crate::gpu::{layout, PassTimestamps};
 use crate::light_frustum::LightFrustum;
-use crate::methods::hard::ShadowMapSettings;
+use crate::pass_cache::PassKey;
+use crate::methods::hard::{ShadowMapSettings, ShadowTestUniform};
 use crate::methods::pcf::{ComparisonSamplers, Filter};
 use crate::methods::silhouettes::{OpenEdges, SilhouetteCache, SilhouetteEdge};
 use crate::methods::{ParamReader, ParamValue};
@@ -238,18 +239,84 @@ pub struct PenumbraVolumeMaskFiltering {
     blur_layout: wgpu::BindGroupLayout,
 }
 
-/// What one PVMF render produced besides visibility.
-pub struct PvmfFrame {
+/// The penumbra volume mask (pass 2), as the renderer's pass cache keeps it.
+pub struct PvmfMask {
     pub mask_depth: wgpu::Texture,
     pub edge_distance: wgpu::Texture,
-    /// The raw estimate (the visibility texture itself when nothing is blurred:
-    /// n_blur is 0 or the light a point).
-    pub raw: Option<wgpu::Texture>,
+    pub stats: MaskStats,
+}
+
+/// The visibility estimate (pass 3) with what it writes besides, as the
+/// renderer's pass cache keeps it: the blur passes read it and write only
+/// the frame's visibility and the `blurred_pixels` counter.
+pub struct PvmfEstimate {
+    /// The raw estimate (the frame's visibility when nothing is blurred).
+    pub raw: wgpu::Texture,
     pub blur_mask: wgpu::Texture,
     pub filter_width: wgpu::Texture,
+    /// `COUNTERS` as the estimate left them (`blurred_pixels` still 0).
     pub counters: wgpu::Buffer,
-    pub stats: MaskStats,
-    pub cache_hits: usize,
+}
+
+impl PvmfEstimate {
+    pub fn new(device: &wgpu::Device, size: (u32, u32)) -> Self {
+        Self {
+            raw: ShadingPass::create_visibility(device, size),
+            blur_mask: ShadingPass::create_visibility(device, size),
+            filter_width: ShadingPass::create_visibility(device, size),
+            counters: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("pvmf::estimate_counters"),
+                contents: &[0u8; 4 * COUNTERS.len()],
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            }),
+        }
+    }
+}
+
+/// Whether passes 4 and 5 run: not for n_blur = 0, nor for a point light
+/// (nothing is masked, so nothing would be blurred).
+pub fn blurs(params: &PvmfParams, radius: f64) -> bool {
+    params.n_blur > 0 && radius > 0.0
+}
+
+/// This frame's counters: the estimate's, to which the blur adds its own.
+pub fn frame_counters(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, estimate: &PvmfEstimate) -> wgpu::Buffer {
+    let size = 4 * COUNTERS.len() as u64;
+    let counters = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("pvmf::counters"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    encoder.copy_buffer_to_buffer(&estimate.counters, 0, &counters, 0, size);
+    counters
+}
+
+/// What pass 2 reads besides the geometry: the light, the frustum, the map
+/// size and the volume parameters (appended to the pass-cache key).
+pub fn mask_key(params: &PvmfParams, frustum: &LightFrustum, (l, r): (DVec3, f64), key: &mut PassKey) {
+    let offsets = if params.offsets == Offsets::Unit { "unit" } else { "radius" };
+    key.f64s(&l.to_array())
+        .f64s(&[r, params.s_e])
+        .bytes(offsets.as_bytes())
+        .bytes(params.open_edges.name().as_bytes())
+        .frustum(frustum)
+        .u32(params.shadow.map_size);
+}
+
+/// The uniform blocks of pass 3.
+fn estimate_uniforms(params: &PvmfParams, frustum: &LightFrustum, light: ([f32; 3], f32)) -> (ShadowTestUniform, SettingsUniform) {
+    let test = params.shadow.uniform(frustum, light.0, light.1, 0);
+    let flags = u32::from(params.kernel == Kernel::Disk) | (u32::from(!params.filter_umbra) << 1);
+    let settings = SettingsUniform { s_p: params.s_p as f32, n_pcf: params.n_pcf, seed: params.seed as u32, flags };
+    (test, settings)
+}
+
+/// What pass 3 reads besides the G-buffer, the shadow map and the mask: its
+/// uniform blocks, bit for bit, and the comparison sampler.
+pub fn estimate_key(params: &PvmfParams, frustum: &LightFrustum, light: ([f32; 3], f32), key: &mut PassKey) {
+    let (test, settings) = estimate_uniforms(params, frustum, light);
+    key.pod(&test).pod(&settings).bytes(params.filter.name().as_bytes());
 }
 
 impl PenumbraVolumeMaskFiltering {
@@ -332,9 +399,8 @@ impl PenumbraVolumeMaskFiltering {
         scene: &PreparedScene,
         frustum: &LightFrustum,
         (l, r): (DVec3, f64),
-        size: (u32, u32),
         timestamps: Option<PassTimestamps<'_>>,
-    ) -> Result<PvmfFrame> {
+    ) -> Result<(PvmfMask, usize)> {
         let map = params.shadow.map_size;
         let (mut stats, mut cache_hits, mut vertices) = (MaskStats::default(), 0, Vec::new());
         // A point light has no penumbra: no volumes, and nothing is filtered.
@@ -392,26 +458,11 @@ impl PenumbraVolumeMaskFiltering {
             pass.draw(0..vertices.len() as u32, 0..1);
         }
         drop(pass);
-        let counters = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvmf::counters"),
-            contents: &[0u8; 4 * COUNTERS.len()],
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
-        Ok(PvmfFrame {
-            mask_depth,
-            edge_distance,
-            // Nothing is masked for a point light: no blur either.
-            raw: (params.n_blur > 0 && r > 0.0).then(|| ShadingPass::create_visibility(device, size)),
-            blur_mask: ShadingPass::create_visibility(device, size),
-            filter_width: ShadingPass::create_visibility(device, size),
-            counters,
-            stats,
-            cache_hits,
-        })
+        Ok((PvmfMask { mask_depth, edge_distance, stats }, cache_hits))
     }
 
-    /// Pass 3: the visibility estimate (5.2), into `frame.raw` when a blur
-    /// follows, else straight into `visibility`.
+    /// Pass 3: the visibility estimate (5.2), into `estimate.raw`, with the
+    /// blur mask and filter widths beside it.
     #[allow(clippy::too_many_arguments)]
     pub fn record_estimate(
         &self,
@@ -419,29 +470,28 @@ impl PenumbraVolumeMaskFiltering {
         encoder: &mut wgpu::CommandEncoder,
         params: &PvmfParams,
         samplers: &ComparisonSamplers,
-        frame: &PvmfFrame,
+        mask: &PvmfMask,
+        estimate: &PvmfEstimate,
         gbuffer: &GBuffer,
         shadow_map: &wgpu::Texture,
         frustum: &LightFrustum,
         light: ([f32; 3], f32),
-        visibility: &wgpu::Texture,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
         let size = gbuffer.size;
+        let (test, settings) = estimate_uniforms(params, frustum, light);
         let test = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("pvmf::test_uniforms"),
-            contents: bytemuck::bytes_of(&params.shadow.uniform(frustum, light.0, light.1, 0)),
+            contents: bytemuck::bytes_of(&test),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let flags = u32::from(params.kernel == Kernel::Disk) | (u32::from(!params.filter_umbra) << 1);
-        let settings = SettingsUniform { s_p: params.s_p as f32, n_pcf: params.n_pcf, seed: params.seed as u32, flags };
         let settings = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("pvmf::settings"),
             contents: bytemuck::bytes_of(&settings),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let target = frame.raw.as_ref().unwrap_or(visibility);
-        let views = [shadow_map, &frame.mask_depth, &frame.edge_distance, target, &frame.blur_mask, &frame.filter_width].map(layout::view);
+        let e = estimate;
+        let views = [shadow_map, &mask.mask_depth, &mask.edge_distance, &e.raw, &e.blur_mask, &e.filter_width].map(layout::view);
         let bind_group = layout::bind_group(
             device,
             "pvmf::estimate_bind_group",
@@ -458,27 +508,28 @@ impl PenumbraVolumeMaskFiltering {
                 wgpu::BindingResource::TextureView(&views[3]),
                 wgpu::BindingResource::TextureView(&views[4]),
                 wgpu::BindingResource::TextureView(&views[5]),
-                frame.counters.as_entire_binding(),
+                e.counters.as_entire_binding(),
             ],
         );
         layout::dispatch_per_pixel(encoder, "pvmf::estimate_pass", &self.estimate_pipeline, &bind_group, size, timestamps);
     }
 
-    /// Passes 4 and 5: the separable, object-aware blur (5.3), horizontal
-    /// into a temporary buffer, then vertical into `visibility`. Nothing to do
-    /// when n_blur is 0.
+    /// Passes 4 and 5: the separable, object-aware blur (5.3) of the
+    /// estimate, horizontal into a temporary buffer, then vertical into
+    /// `visibility`; `counters` are this frame's (see [`frame_counters`]).
     #[allow(clippy::too_many_arguments)]
     pub fn record_blur(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         params: &PvmfParams,
-        frame: &PvmfFrame,
+        estimate: &PvmfEstimate,
+        counters: &wgpu::Buffer,
         gbuffer: &GBuffer,
         visibility: &wgpu::Texture,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
-        let Some(raw) = &frame.raw else { return };
+        let raw = &estimate.raw;
         let temporary = ShadingPass::create_visibility(device, gbuffer.size);
         let half_width = (params.n_blur / 2) as i32;
         let steps = [(raw, &temporary, [1, 0], true), (&temporary, visibility, [0, 1], false)];
@@ -488,7 +539,7 @@ impl PenumbraVolumeMaskFiltering {
                 contents: bytemuck::bytes_of(&BlurUniform { step, half_width, count: u32::from(first) }),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-            let views = [source, &frame.blur_mask, destination].map(layout::view);
+            let views = [source, &estimate.blur_mask, destination].map(layout::view);
             let bind_group = layout::bind_group(
                 device,
                 "pvmf::blur_bind_group",
@@ -499,7 +550,7 @@ impl PenumbraVolumeMaskFiltering {
                     wgpu::BindingResource::TextureView(&views[1]),
                     uniforms.as_entire_binding(),
                     wgpu::BindingResource::TextureView(&views[2]),
-                    frame.counters.as_entire_binding(),
+                    counters.as_entire_binding(),
                 ],
             );
             let writes = timestamps.and_then(|t| t.compute_part(first, !first));

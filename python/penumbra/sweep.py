@@ -1,0 +1,284 @@
+"""Parameter sweeps: many renders of one or several scenes with one or several
+methods, measured against ground truth, as one pandas DataFrame.
+
+A sweep renders its configurations in order on one renderer, whose pass
+cache (see :class:`penumbra.Renderer`) reuses every pass a parameter change
+does not affect: order the grid so that late-stage parameters (PVMF's
+``n_blur``, PVM's ``falloff``) vary fastest, which a dict grid does when they
+are its last keys.
+
+Configurations can be spread over processes with any
+``concurrent.futures.Executor``; each worker process builds its own renderer
+once (a module-level one, with its own pass cache) and renders contiguous
+chunks of the grid, so late-stage sweeps keep their reuse within a chunk.
+The same call runs on a Dask cluster with ``executor=client.get_executor()``
+(``distributed.Client``), provided the workers have penumbra installed.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import itertools
+import math
+import os
+import sys
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Union
+
+import numpy as np
+
+from penumbra.errors import ParameterError, SceneError
+from penumbra.render import Renderer, RenderResult
+from penumbra.scene import Camera, Scene
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from penumbra.mitsuba import GroundTruth
+
+__all__ = ["sweep", "grid"]
+
+#: Images kept per configuration with ``keep_images=True``.
+DEFAULT_IMAGES = ("radiance", "visibility")
+
+ParamGrid = Union[Mapping[str, Sequence[Any]], Sequence[Mapping[str, Any]], None]
+Scenes = Union[Scene, Mapping[str, Scene], Sequence[Scene]]
+
+
+def grid(params: ParamGrid) -> list[dict[str, Any]]:
+    """The parameter sets of ``params``: a dict of lists is their Cartesian
+    product, the last key varying fastest; a list of dicts is taken as is;
+    ``None`` is one set of defaults."""
+    if params is None:
+        return [{}]
+    if isinstance(params, Mapping):
+        keys = list(params)
+        values = []
+        for k in keys:
+            v = params[k]
+            if isinstance(v, (str, bytes)) or not isinstance(v, Iterable):
+                raise ParameterError(f"grid values of {k!r} must be a list of values, got {v!r}")
+            values.append(list(v))
+        return [dict(zip(keys, combo)) for combo in itertools.product(*values)]
+    sets = [dict(p) for p in params]
+    for p in sets:
+        if not all(isinstance(k, str) for k in p):
+            raise ParameterError(f"parameter names must be strings, got {list(p)}")
+    return sets
+
+
+def _scenes(scenes: Scenes) -> dict[str, Scene]:
+    if isinstance(scenes, Scene):
+        return {"scene": scenes}
+    if isinstance(scenes, Mapping):
+        named = {str(k): v for k, v in scenes.items()}
+    else:
+        named = {f"scene{i}": s for i, s in enumerate(scenes)}
+    if not named:
+        raise SceneError("a sweep needs at least one scene")
+    for name, s in named.items():
+        if not isinstance(s, Scene):
+            raise SceneError(f"scene {name!r} is a {type(s).__name__}, not a penumbra.Scene")
+    return named
+
+
+@dataclass
+class _Task:
+    """One configuration, as it travels to a worker."""
+
+    index: int
+    scene_name: str
+    method: str
+    params: dict[str, Any]
+
+
+@dataclass
+class _Chunk:
+    """Contiguous configurations, rendered in order on one renderer."""
+
+    scenes: dict[str, Scene]
+    camera: Camera | None
+    tasks: list[_Task]
+    ground_truth: dict[str, GroundTruth]
+    keep_images: tuple[str, ...]
+    #: Every parameter named in the grid: a column each, with the value in effect.
+    columns: tuple[str, ...] = ()
+
+
+_PROCESS_RENDERER: Renderer | None = None
+
+
+def process_renderer() -> Renderer:
+    """This process's sweep renderer, built on first use (pass cache on):
+    the one in-process sweeps use by default, and each executor worker's own."""
+    global _PROCESS_RENDERER
+    if _PROCESS_RENDERER is None:
+        _PROCESS_RENDERER = Renderer()
+    return _PROCESS_RENDERER
+
+
+def _row(task: _Task, result: RenderResult, chunk: _Chunk) -> tuple[dict[str, Any], dict[str, np.ndarray] | None]:
+    from penumbra import metrics
+
+    row: dict[str, Any] = {"config": task.index, "scene": task.scene_name, "method": task.method}
+    row.update({k: result.params.get(k, task.params.get(k)) for k in chunk.columns})
+    row["total_ms"] = result.total_ms
+    row["timing_source"] = result.timing_source
+    for name, ms in result.timings.items():
+        row[f"time_{name}"] = ms
+    for name, value in result.stats.items():
+        row[f"stat_{name}"] = value
+    row["reused"] = ",".join(result.reused_passes)
+    row["worker_pid"] = os.getpid()
+    gt = chunk.ground_truth.get(task.scene_name)
+    if gt is not None:
+        row.update(metrics.compare(result, gt))
+    images = {k: result.images[k] for k in chunk.keep_images if k in result.images} if chunk.keep_images else None
+    return row, images
+
+
+def _run_chunk(chunk: _Chunk, renderer: Renderer | None = None) -> list[tuple[dict[str, Any], dict[str, np.ndarray] | None]]:
+    """Renders a chunk in order (a worker's entry point; importable, so that
+    process pools and Dask can ship it)."""
+    renderer = renderer or process_renderer()
+    out = []
+    for task in chunk.tasks:
+        result = renderer.render(chunk.scenes[task.scene_name], task.method, camera=chunk.camera, **task.params)
+        out.append(_row(task, result, chunk))
+    return out
+
+
+def _ground_truths(
+    ground_truth: Any, scenes: dict[str, Scene], camera: Camera | None, spp: int
+) -> dict[str, GroundTruth]:
+    from penumbra.mitsuba import GroundTruth, ground_truth as render_ground_truth
+
+    if ground_truth is None or ground_truth is False:
+        return {}
+    if ground_truth is True:
+        # With a second seed, as penumbra.compare: every metric gets its noise floor.
+        return {name: render_ground_truth(s, camera, spp=spp, noise_seed=1) for name, s in scenes.items()}
+    if isinstance(ground_truth, GroundTruth):
+        if len(scenes) != 1:
+            raise ParameterError("one GroundTruth given for several scenes; pass a dict of scene name to GroundTruth")
+        return {next(iter(scenes)): ground_truth}
+    if isinstance(ground_truth, Mapping):
+        missing = [n for n in scenes if n not in ground_truth]
+        if missing:
+            raise ParameterError(f"no ground truth for scene(s) {missing}")
+        return {n: ground_truth[n] for n in scenes}
+    raise ParameterError(f"ground_truth must be None, True, a GroundTruth or a dict of them, got {type(ground_truth).__name__}")
+
+
+def _progress_bar(total: int, progress: bool | None) -> Any:
+    show = progress if progress is not None else sys.stderr.isatty()
+    if not show:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="render", desc="sweep")
+
+
+def sweep(
+    scenes: Scenes,
+    method: str | Sequence[str],
+    params: ParamGrid = None,
+    *,
+    ground_truth: bool | GroundTruth | Mapping[str, GroundTruth] | None = None,
+    ground_truth_spp: int = 256,
+    camera: Camera | None = None,
+    renderer: Renderer | None = None,
+    executor: concurrent.futures.Executor | None = None,
+    chunksize: int | None = None,
+    keep_images: bool | Sequence[str] = False,
+    progress: bool | None = None,
+) -> pd.DataFrame:
+    """Renders every (scene, method, parameter set) and returns one row each.
+
+    ``scenes``: a :class:`~penumbra.Scene`, a dict of name to scene, or a
+    list (named ``scene0``, ``scene1``, ...). ``method``: a method name or a
+    list of them. ``params``: a dict of lists (their product, the last key
+    varying fastest), a list of dicts, or None (defaults). Configurations run
+    scene by scene, then method by method, then through the grid in order.
+
+    ``ground_truth``: None; True to render Mitsuba ground truth of each scene
+    at ``ground_truth_spp``, with a second seed for the noise floor as
+    :func:`penumbra.compare` does (both cached under ``$PENUMBRA_CACHE_DIR``); a
+    :class:`~penumbra.mitsuba.GroundTruth` for a single scene; or a dict of
+    scene name to one. With it, every row has every metric of
+    :func:`penumbra.metrics.compare`.
+
+    Columns: ``config`` (the index in run order), ``scene``, ``method``, each
+    parameter the grid names (the value in effect: a method's default where a
+    set leaves it out), ``total_ms``, ``timing_source``, ``time_<pass>`` (ms,
+    only for passes that ran: a pass the renderer's cache reused has none,
+    NaN in its column), ``stat_<name>`` for each stat (``stat_reused_passes``
+    and ``stat_reused_<pass>`` say what was reused), ``reused`` (the reused
+    passes' names, comma-separated), ``worker_pid``, and the metrics.
+    ``keep_images=True`` adds an ``images`` column of dicts holding
+    radiance and visibility; a list of image names keeps those instead.
+
+    ``renderer``: the renderer for in-process sweeps (default: one per
+    process, kept between sweeps, so repeated sweeps reuse its cache).
+    ``executor``: any ``concurrent.futures.Executor``; configurations go to
+    it in contiguous chunks of ``chunksize`` (default: about two chunks per
+    worker), each worker rendering with its own process-wide renderer. With a
+    ``ProcessPoolExecutor`` that is one renderer per process; on Dask, pass
+    ``distributed.Client(...).get_executor()``. Timings from concurrent
+    workers share the machine's cores: time with ``executor=None``.
+
+    ``progress``: a tqdm bar (default: only when stderr is a terminal).
+    """
+    import pandas as pd
+
+    named = _scenes(scenes)
+    methods = [method] if isinstance(method, str) else list(method)
+    if not methods or not all(isinstance(m, str) for m in methods):
+        raise ParameterError(f"method must be a name or a list of names, got {method!r}")
+    sets = grid(params)
+    if keep_images is True:
+        kept: tuple[str, ...] = DEFAULT_IMAGES
+    elif keep_images is False:
+        kept = ()
+    else:
+        kept = tuple(keep_images)
+    columns = tuple(dict.fromkeys(k for p in sets for k in p))
+    truths = _ground_truths(ground_truth, named, camera, ground_truth_spp)
+    tasks = [
+        _Task(i, scene_name, m, p)
+        for i, (scene_name, m, p) in enumerate(itertools.product(named, methods, sets))
+    ]
+    rows: list[tuple[dict[str, Any], dict[str, np.ndarray] | None]] = []
+    bar = _progress_bar(len(tasks), progress)
+    try:
+        if executor is None:
+            chunk = _Chunk(named, camera, [], truths, kept, columns)
+            target = renderer or process_renderer()
+            for task in tasks:
+                chunk.tasks = [task]
+                rows.extend(_run_chunk(chunk, target))
+                if bar is not None:
+                    bar.update(1)
+        else:
+            if renderer is not None:
+                raise ParameterError("renderer= is for in-process sweeps; executor workers build their own")
+            workers = getattr(executor, "_max_workers", None) or os.cpu_count() or 1
+            size = chunksize or max(1, math.ceil(len(tasks) / (2 * workers)))
+            futures = [
+                executor.submit(_run_chunk, _Chunk(named, camera, tasks[i : i + size], truths, kept, columns))
+                for i in range(0, len(tasks), size)
+            ]
+            for future in concurrent.futures.as_completed(futures):
+                done = future.result()
+                rows.extend(done)
+                if bar is not None:
+                    bar.update(len(done))
+    finally:
+        if bar is not None:
+            bar.close()
+    rows.sort(key=lambda r: r[0]["config"])
+    frame = pd.DataFrame([r[0] for r in rows])
+    if kept:
+        frame["images"] = [r[1] for r in rows]
+    return frame
