@@ -220,10 +220,7 @@ def make_renderer() -> Renderer:
     from penumbra.render import adapter_info
 
     timing = "cpu" if adapter_info().get("software") else "auto"
-    try:
-        return Renderer(timing, pass_cache=False)  # type: ignore[call-arg]
-    except TypeError:
-        return Renderer(timing)
+    return Renderer(timing, pass_cache=False)
 
 
 def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None] = print) -> list[dict[str, Any]]:
