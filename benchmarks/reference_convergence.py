@@ -9,7 +9,7 @@ the shadow-map resolution error (the same samples with a 4096 map instead of
 2048: what the finite map adds), beside the convergence criterion of issue 6,
 twice the ground-truth noise plus the resolution error.
 
-    python benchmarks/reference_convergence.py [--size 128] [--spp 4096]
+    python benchmarks/reference_convergence.py [--size 128] [--spp 4096] [--sampling sphere disk] [--scenes ...]
 """
 
 from __future__ import annotations
@@ -27,7 +27,10 @@ def main() -> None:
     parser.add_argument("--size", type=int, default=128)
     parser.add_argument("--spp", type=int, default=4096)
     parser.add_argument("--samples", type=int, nargs="+", default=[16, 64, 256, 1024])
+    parser.add_argument("--sampling", nargs="+", default=["sphere", "disk"], choices=["sphere", "disk"])
+    parser.add_argument("--scenes", nargs="+", default=penumbra.scenes.names())
     args = parser.parse_args()
+    args.samples = sorted(args.samples)
     renderer = penumbra.Renderer(timing="cpu", pass_cache=False)
     n_max = max(args.samples)
     print(f"{args.size}x{args.size}; ground truth Mitsuba {pm.variant()} at {args.spp} spp; map_size 2048 unless stated\n")
@@ -38,20 +41,21 @@ def main() -> None:
         "criterion: 2 x noise + resolution | met |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    for name in penumbra.scenes.names():
+    for name in args.scenes:
         scene = penumbra.scenes.get(name, width=args.size, height=args.size)
         gt = pm.ground_truth(scene, spp=args.spp, noise_seed=1, kinds=["visibility"])
         region = metrics.penumbra_region(gt.visibility)
-        for sampling in ("sphere", "disk"):
+        for sampling in args.sampling:
             cells = []
             for n in args.samples:
-                m = metrics.compare(renderer.render(scene, "reference", n_samples=n, sampling=sampling), gt)
+                result = renderer.render(scene, "reference", n_samples=n, sampling=sampling)
+                m = metrics.compare(result, gt)
                 cells.append(f"{m['visibility_rmse_penumbra']:.4f}")
             convergence.append(f"| {name} | {sampling} | " + " | ".join(cells) + " |")
             print(convergence[-1], flush=True)
             if sampling != "sphere":
                 continue
-            base = renderer.render(scene, "reference", n_samples=n_max).visibility
+            base = result.visibility  # n_max, the last of the sorted sample counts
             other_seed = renderer.render(scene, "reference", n_samples=n_max, seed=1).visibility
             finer = renderer.render(scene, "reference", n_samples=n_max, map_size=4096).visibility
             error = metrics.rmse(base, gt.visibility, region)
