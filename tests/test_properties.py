@@ -162,13 +162,21 @@ def test_random_scenes_are_finite_in_range_and_deterministic_long(renderer: penu
     _finite_in_range_and_deterministic(renderer, spec, exponent, method)
 
 
-# Visibility of the same scene at another scale and place may differ where a
-# pixel or texel boundary moves by float32 rounding: on shadow outlines and
-# at contacts. Measured over the derandomized examples (benchmarks/stability.py):
-# up to MISMATCH_FRACTION of the pixels differ by more than 0.1 in visibility,
-# and the mean absolute difference stays below MEAN_DIFFERENCE.
-MISMATCH_FRACTION = 0.03
-MEAN_DIFFERENCE = 0.01
+# Visibility of the same scene at another scale and place. Measured by
+# `XDG_RUNTIME_DIR=/tmp python3 benchmarks/stability.py --scenes 20` (seed 8:
+# 20 random scenes from the ranges of `scene_specs`/`SCALES`, 19 rendered,
+# one refused; 32x32, FAST parameters): hard, pcf, pcss, pvm and reference
+# gave identical visibility in every case (fraction of pixels differing by
+# more than 0.1: max 0.0000; mean absolute difference: max 0.0000). The
+# bounds allow two pixels of 1024 and a mean of 1e-3 on top of that measured
+# 0, for float32 rounding moving a texel boundary in scenes not yet seen.
+# pvmf is NOT invariant: max 0.1182 of pixels differing by more than 0.1
+# (p99 0.1178, median 0.0088), mean difference max 0.0312: a bug found by the
+# measurement (docs/stability.md), not fixed: the worst measured scene is
+# an expected failure below; the derandomized CI examples happen to stay
+# within the bounds for pvmf too, the slow variant is expected to fail.
+MISMATCH_FRACTION = 2 / 1024
+MEAN_DIFFERENCE = 1e-3
 
 
 def visibility_difference(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
@@ -200,12 +208,22 @@ def test_uniform_scale_and_translation_leave_visibility_unchanged_long(renderer:
     _scale_and_translation_invariant(renderer, spec, exponent, method)
 
 
+@pytest.mark.xfail(strict=True, reason="pvmf is not scale+translation invariant (benchmarks/stability.py; docs/stability.md); not fixed")
+def test_pvmf_worst_measured_scene_is_scale_and_translation_invariant(renderer: penumbra.Renderer) -> None:
+    """The largest pvmf difference benchmarks/stability.py found (seed 8): 0.1182 of the pixels."""
+    spec = SceneSpec("sphere", 1.2829627341064935, 2.1686630364650665, 61.79789065224047, "touching", 2.2453816619167126, 0.01, 79.80142386110028, 133.13616364973657)
+    _scale_and_translation_invariant(renderer, spec, 1, "pvmf")
+
+
 # As the radius goes to 0, every method but pcf (whose kernel is fixed in
-# texels, independent of the light) tends to `hard`: at radius 1e-5 caster
-# sizes, measured over the examples, at most this fraction of pixels differ
-# from `hard` by more than 0.5 (single texels on outlines, where the
-# methods' own biases and sampling differ from hard's).
-CONVERGED_MISMATCH = 0.01
+# texels, independent of the light) tends to `hard`: the fraction of pixels
+# differing from `hard` by more than 0.5 at radius 1e-5 caster sizes
+# (single texels on outlines, where the methods' own biases and sampling
+# differ from hard's). Measured by the same command as above (19 scenes per
+# method): max 0.0010 pcss, 0.0000 pvm, 0.0098 pvmf (p99 0.0094, median
+# 0.0020), 0.0020 reference; over all four max 0.0098, p99 0.0083. Bound:
+# 1.5 x the largest measured value (0.0098 is 10 pixels of 1024; 0.015 is 15).
+CONVERGED_MISMATCH = 0.015
 SOFT_METHODS = [m for m in METHODS if m not in ("hard", "pcf")]
 
 
