@@ -10,7 +10,7 @@ import pytest
 
 import penumbra
 from penumbra import CameraError, LightError, MeshError, ParameterError, SceneError
-from penumbra.scenes import ground_plane, sphere
+from penumbra.scenes import box, ground_plane, sphere
 
 QUAD_V = np.array([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], dtype=np.float32)
 QUAD_F = np.array([[0, 2, 1], [0, 3, 2]])
@@ -42,6 +42,33 @@ def with_inf() -> np.ndarray:
     v = QUAD_V.copy()
     v[1, 0] = np.inf
     return v
+
+
+def replaced(mesh: penumbra.Mesh, **attributes: Any) -> penumbra.Mesh:
+    """The mesh with public attributes overwritten after construction (as a
+    script may do), bypassing the constructor's checks."""
+    for name, value in attributes.items():
+        setattr(mesh, name, value)
+    return mesh
+
+
+def appended(scene: penumbra.Scene, item: Any) -> penumbra.Scene:
+    scene.meshes.append(item)
+    return scene
+
+
+def with_attr(scene: penumbra.Scene, name: str, value: Any) -> penumbra.Scene:
+    setattr(scene, name, value)
+    return scene
+
+
+def closed_box() -> penumbra.Mesh:
+    return box((0, 1, 0), (0.5, 0.5, 0.5), name="box")
+
+
+def empty_file() -> str:
+    open("empty.obj", "w").close()
+    return "empty.obj"
 
 
 # (id, action, exception, words the message must contain)
@@ -120,6 +147,64 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("image_extension", lambda r: penumbra.write_image("out.bmp", np.zeros((2, 2), np.float32)), ParameterError, [".png or .exr"]),
     ("image_shape", lambda r: penumbra.write_image("out.png", np.zeros((2, 2, 4), np.float32)), ParameterError, ["(H, W)"]),
     ("exr_nan", lambda r: penumbra.write_image("out.exr", np.full((2, 2), np.nan, np.float32)), ParameterError, ["non-finite"]),
+    # Issue 8: more of the matrix (dtype, shape, NaN/Inf, ranges, geometry around the camera and light)
+    ("vertices_3d_array", lambda r: quad(vertices=QUAD_V[:, :, None]), MeshError, ["vertices", "shape (N, 3)"]),
+    ("vertices_scalar", lambda r: quad(vertices=1.0), MeshError, ["vertices", "shape (N, 3)"]),
+    ("vertices_object_none", lambda r: quad(vertices=[[0, None, 0]] * 4), MeshError, ["vertices", "numeric"]),
+    ("vertices_ragged", lambda r: quad(vertices=[[0, 0, 0], [1, 0]]), MeshError, ["vertices"]),
+    ("vertices_float16_inf", render([quad(vertices=np.full((4, 3), np.inf, dtype=np.float16))]), MeshError, ["infinite"]),
+    ("vertices_replaced_after_construction", render([replaced(quad(), vertices=QUAD_V.astype(np.float64)[:, :2])]), MeshError, ["vertices", "shape (N, 3)"]),
+    ("faces_bool", lambda r: quad(faces=QUAD_F.astype(bool)), MeshError, ["faces", "integers"]),
+    ("faces_beyond_uint32", lambda r: quad(faces=np.array([[0, 1, 2**33]], dtype=np.int64)), MeshError, ["exceeds uint32"]),
+    ("faces_replaced_after_construction", render([replaced(quad(), faces=[[0, 1, 9]])]), MeshError, ["face 0", "out of range"]),
+    ("faces_string", lambda r: quad(faces="0 1 2"), MeshError, ["faces"]),
+    ("normals_nan", render([quad(normals=np.full((4, 3), np.nan))]), MeshError, ["normal 0"]),
+    ("normals_shape", lambda r: quad(normals=np.ones((4, 2))), MeshError, ["normals", "shape (N, 3)"]),
+    ("transform_inf", render([quad(transform=np.diag([1, np.inf, 1, 1]))]), MeshError, ["transform", "infinite"]),
+    ("transform_overflows_vertices", render([quad(transform=np.diag([1e38, 1e38, 1e38, 1]) @ np.diag([10, 10, 10, 1]))]), MeshError, ["infinite"]),
+    ("name_and_mesh_in_message", render([quad(name="wing", vertices=with_nan())]), MeshError, ["'wing'"]),
+    ("light_center_shape", lambda r: penumbra.SphereLight((0, 3), 0.3, intensity=1), LightError, ["center", "shape (3)"]),
+    ("light_center_inf", render(light=penumbra.SphereLight((0, np.inf, 0), 0.3, intensity=1)), LightError, ["center", "finite"]),
+    ("radius_inf", lambda r: penumbra.SphereLight((0, 3, 0), float("inf"), intensity=1), LightError, ["radius", "finite"]),
+    ("radius_bool", lambda r: penumbra.SphereLight((0, 3, 0), True, intensity=1), LightError, ["radius", "real number"]),
+    ("intensity_nan", render(light=penumbra.SphereLight((0, 3, 0), 0.3, intensity=(1, np.nan, 1))), LightError, ["intensity", "finite"]),
+    ("radiance_overflows_intensity", render(light=penumbra.SphereLight((0, 1e19, 0), 1e18, radiance=1e30)), LightError, ["intensity", "finite"]),
+    ("huge_radius_swallows_scene", render(light=penumbra.SphereLight((0, 3, 0), 1e6, intensity=1)), SceneError, ["intersects mesh 'quad'"]),
+    ("light_inside_closed_box", render([box((0, 1, 0), (2, 2, 2), name="room")], light=penumbra.SphereLight((0, 1, 0), 0.2, intensity=1), method="pvm"), SceneError, ["surrounds the light"]),
+    ("fov_negative", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=-10, width=8, height=8)), CameraError, ["fov_y"]),
+    ("fov_nan", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=float("nan"), width=8, height=8)), CameraError, ["fov_y"]),
+    ("fov_string", lambda r: penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y="wide"), CameraError, ["fov_y", "real number"]),
+    ("up_zero", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), up=(0, 0, 0), width=8, height=8)), CameraError, ["up vector is zero"]),
+    ("target_inf", lambda r: penumbra.Camera((0, 4, 6), (0, np.inf, 0)), CameraError, ["target", "finite"]),
+    ("width_beyond_int32", lambda r: CAMERA.with_size(2**40, 8), CameraError, ["width", "2^31"]),
+    ("one_pixel_by_huge", render(camera=CAMERA.with_size(1, 2**31)), CameraError, ["exceeds"]),
+    ("camera_override_wrong_type", lambda r: r.render(penumbra.Scene([quad()], LIGHT, CAMERA), camera="front"), CameraError, ["penumbra.Camera"]),
+    ("mesh_appended_after_construction", lambda r: r.render(appended(penumbra.Scene([quad()], LIGHT, CAMERA), "box")), SceneError, ["meshes[1]", "penumbra.Mesh"]),
+    ("light_replaced_after_construction", lambda r: r.render(with_attr(penumbra.Scene([quad()], LIGHT, CAMERA), "light", None)), SceneError, ["light"]),
+    ("ambient_nan", lambda r: r.render(penumbra.Scene([quad()], LIGHT, CAMERA, ambient=np.nan)), SceneError, ["ambient"]),
+    ("method_not_a_string", render(method=None), ParameterError, ["method", "string"]),
+    ("method_wrong_case", render(method="PVM"), ParameterError, ["unknown method 'PVM'"]),
+    ("method_backprojection", render(method="backprojection"), ParameterError, ["not implemented"]),
+    ("param_of_another_method", render(method="pcf", s_e=0.5), ParameterError, ["s_e", "pcf"]),
+    ("param_none", render(map_size=None), ParameterError, ["map_size", "unsupported type"]),
+    ("param_int_overflow", render(map_size=2**80), ParameterError, ["map_size", "integer"]),
+    ("param_inf", render(method="pvmf", s_p=float("inf")), ParameterError, ["s_p"]),
+    ("map_size_huge", render(map_size=10**6), ParameterError, ["map_size", "[16, 16384]"]),
+    ("pvmf_s_e_zero", render(method="pvmf", s_e=0.0), ParameterError, ["s_e", "(0, 1]"]),
+    ("pvmf_s_e_above_one", render(method="pvmf", s_e=1.5), ParameterError, ["s_e"]),
+    ("pvmf_n_pcf_zero", render(method="pvmf", n_pcf=0), ParameterError, ["n_pcf", "[1, 32]"]),
+    ("pvmf_seed_negative", render(method="pvmf", seed=-1), ParameterError, ["seed"]),
+    ("pvmf_kernel_unknown", render(method="pvmf", kernel="hexagon"), ParameterError, ["kernel", "square", "disk"]),
+    ("pvm_falloff_string", render(method="pvm", falloff="yes"), ParameterError, ["falloff", "bool"]),
+    ("pvm_open_edges_unknown", render(method="pvm", open_edges="ignore"), ParameterError, ["open_edges", "silhouette"]),
+    ("pvm_open_caster", render(method="pvm"), MeshError, ["'quad'", "not closed", "open_edges='silhouette'"]),
+    ("pvm_non_manifold_caster", render([closed_box(), quad(faces=np.vstack([QUAD_F, QUAD_F]))], method="pvm", open_edges="silhouette"), MeshError, ["'quad'", "not a 2-manifold"]),
+    ("pvmf_open_caster", render(method="pvmf"), MeshError, ["not closed"]),
+    ("result_unknown_image", lambda r: render()(r).save("x.png", image="albedo"), ParameterError, ["albedo"]),
+    ("write_into_missing_folder", lambda r: penumbra.write_image("no/such/dir/out.png", np.zeros((2, 2), np.float32)), penumbra.PenumbraIOError, ["no/such/dir/out.png"]),
+    ("mesh_file_empty", lambda r: penumbra.scenes.from_mesh(empty_file()), MeshError, ["empty.obj"]),
+    ("mesh_file_is_a_folder", lambda r: penumbra.scenes.from_mesh("."), MeshError, ["cannot read mesh file"]),
+    ("scene_size_zero", lambda r: r.render(penumbra.scenes.get("sphere_on_plane", width=0, height=8)), CameraError, ["at least 1x1"]),
 ]
 
 
@@ -132,7 +217,10 @@ def test_bad_input_raises_a_typed_error(renderer: penumbra.Renderer, action: Cal
     for word in words:
         assert word in message, f"{word!r} not in {message!r}"
     assert isinstance(info.value, penumbra.PenumbraError)
-    assert isinstance(info.value, ValueError), "input errors are ValueErrors too"
+    if issubclass(error, penumbra.InvalidInputError):
+        assert isinstance(info.value, ValueError), "input errors are ValueErrors too"
+    else:
+        assert isinstance(info.value, OSError), "output errors are OSErrors"
 
 
 def test_renderer_still_works_after_errors(renderer: penumbra.Renderer) -> None:

@@ -63,12 +63,49 @@ def test_render_mesh_file(tmp_path: Path) -> None:
         (["render", "--mesh", "/nonexistent/file.obj"], "cannot read mesh file"),
         (["render", "--light-radius", "-1"], "radius"),
         (["render", "-o", "out.bmp", "--width", "8", "--height", "8"], ".png or .exr"),
+        # Issue 8: more of the bad-input matrix through the command line.
+        (["render", "--method", "wedges"], "not implemented"),
+        (["render", "--light-radius", "nan"], "radius"),
+        (["render", "--light-radius", "inf"], "radius"),
+        (["render", "--height", "-3"], "height"),
+        (["render", "--width", "100000", "--height", "100000"], "exceeds"),
+        (["render", "--width", "8", "--height", "8", "--param", "map_size=1e9"], "map_size"),
+        (["render", "--width", "8", "--height", "8", "--param", "nonsense=1"], "unknown parameter"),
+        (["render", "--width", "8", "--height", "8", "--method", "pvmf", "--param", "s_e=2"], "s_e"),
+        (["render", "--width", "8", "--height", "8", "--method", "pvm", "--param", "falloff=maybe"], "falloff"),
+        (["render", "--width", "8", "--height", "8", "--image", "albedo"], "no image named 'albedo'"),
+        (["render", "--width", "8", "--height", "8", "-o", "no/such/dir/out.png"], "no/such/dir/out.png"),
+        (["render", "--mesh", "empty.obj"], "empty.obj"),
+        (["render", "--mesh", "."], "cannot read mesh file"),
+        (["render", "--mesh", "open.obj", "--method", "pvm", "--width", "8", "--height", "8"], "not closed"),
+        (["render", "--light-radius", "50", "--width", "8", "--height", "8"], "intersects"),
     ],
 )
 def test_bad_arguments_exit_2_with_a_message(args: list[str], words: str, tmp_path: Path) -> None:
+    import trimesh
+
+    (tmp_path / "empty.obj").write_text("")
+    closed = trimesh.creation.box()
+    trimesh.Trimesh(closed.vertices, closed.faces[2:], process=False).export(tmp_path / "open.obj")
     done = subprocess.run([sys.executable, "-m", "penumbra", *args], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert done.returncode == 2, done.stderr
     assert words in done.stderr and "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["render", "--scene", "cube_on_plane", "--mesh", "x.obj"],
+        ["render", "--width", "wide"],
+        ["render", "--light-radius", "big"],
+        ["frobnicate"],
+        [],
+    ],
+    ids=["scene_and_mesh", "width_not_int", "radius_not_float", "unknown_command", "no_command"],
+)
+def test_malformed_command_lines_get_argparse_usage(args: list[str], tmp_path: Path) -> None:
+    done = subprocess.run([sys.executable, "-m", "penumbra", *args], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert done.returncode == 2 and "usage: penumbra" in done.stderr and "Traceback" not in done.stderr
 
 
 def test_listing_commands() -> None:

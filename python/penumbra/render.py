@@ -162,6 +162,7 @@ class Renderer:
         returns the method's intermediate images (e.g. ``shadow_map``)."""
         if not isinstance(scene, Scene):
             raise SceneError(f"expected a penumbra.Scene, got {type(scene).__name__}")
+        scene.check()
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {method!r}")
         camera = camera or scene.camera

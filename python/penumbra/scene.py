@@ -136,8 +136,19 @@ class Mesh:
         return f"Mesh({self.name!r}, {len(self.vertices)} vertices, {len(self.faces)} faces)"
 
     def _core_args(self, index: int) -> tuple:
+        # The attributes are public and may have been replaced since __init__
+        # (a float64 or wrongly shaped array would otherwise reach the core as
+        # an untyped TypeError): coerce and check them again. For arrays that
+        # are already right this copies nothing.
+        name = str(self.name)
+        vertices = _float_array(self.vertices, (None, 3), f"mesh '{name}': vertices", MeshError)
+        normals = None if self.normals is None else _float_array(self.normals, (None, 3), f"mesh '{name}': normals", MeshError)
+        albedo = _rgb(self.albedo, f"mesh '{name}': albedo", MeshError)
+        transform = _float_array(self.transform, (4, 4), f"mesh '{name}': transform", MeshError)
         object_id = index if self.object_id is None else self.object_id
-        return (self.name, self.vertices, self.faces, self.normals, self.albedo, object_id, self.transform)
+        if isinstance(object_id, bool) or not isinstance(object_id, (int, np.integer)):
+            raise MeshError(f"mesh '{name}': object_id must be an integer, got {object_id!r}")
+        return (name, vertices, self._faces(self.faces), normals, albedo, int(object_id), transform)
 
 
 class SphereLight:
@@ -233,6 +244,11 @@ class Scene:
     metadata: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        self.check()
+
+    def check(self) -> None:
+        """Checks the parts' types (again: the fields are public and may be
+        replaced after construction; the renderer calls this before each render)."""
         if isinstance(self.meshes, Mesh):
             self.meshes = [self.meshes]
         self.meshes = list(self.meshes)

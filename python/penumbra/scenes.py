@@ -120,11 +120,46 @@ def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = N
     return scene
 
 
+def _obj_with_relative_indices(path: str) -> trimesh.Trimesh | None:
+    """An OBJ file whose faces use relative (negative) indices, read by
+    positions only; None for any other file.
+
+    trimesh 5.2 resolves relative indices wrongly when an OBJ has several
+    groups (mikedh/trimesh#2364; the Cornell box of ../shared/meshes loses
+    most of its walls), and silently, so such files are read here: each
+    negative index counts back from the vertices read so far (the OBJ
+    specification), and polygons are fan-triangulated."""
+    if not str(path).lower().endswith(".obj"):
+        return None
+    with open(path, encoding="utf-8", errors="replace") as f:
+        lines = f.read().splitlines()
+    if not any(line.startswith("f ") and " -" in line for line in lines):
+        return None
+    vertices: list[list[float]] = []
+    faces: list[list[int]] = []
+    for number, line in enumerate(lines, 1):
+        fields = line.split()
+        if not fields:
+            continue
+        if fields[0] == "v":
+            vertices.append([float(x) for x in fields[1:4]])
+        elif fields[0] == "f":
+            corners = []
+            for field in fields[1:]:
+                i = int(field.split("/")[0])
+                i = i - 1 if i > 0 else len(vertices) + i
+                if not 0 <= i < len(vertices):
+                    raise ValueError(f"line {number}: vertex index {field} out of range")
+                corners.append(i)
+            faces.extend([corners[0], corners[k], corners[k + 1]] for k in range(1, len(corners) - 1))
+    return trimesh.Trimesh(np.array(vertices, dtype=np.float64).reshape(-1, 3), np.array(faces, dtype=np.int64).reshape(-1, 3), process=False)
+
+
 def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5) -> Scene:
     """A scene around a mesh file (anything trimesh reads): the mesh scaled to
     a 2.5-unit bounding box, resting on the ground plane, with the default light and camera."""
     try:
-        loaded = trimesh.load(path, force="mesh")
+        loaded = _obj_with_relative_indices(path) or trimesh.load(path, force="mesh")
     except Exception as e:  # trimesh raises many types for unreadable files
         raise MeshError(f"cannot read mesh file {path!r}: {e}") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:

@@ -1,0 +1,262 @@
+"""Property-based tests of every method on random scenes (issue 8).
+
+Scenes: a closed caster (sphere, box or needle-thin box), sometimes a second
+one touching or intersecting it, over a ground slab; scales from 1e-3 to 1e4;
+light radius from 0 to larger than the casters; the light's surface from
+1e-3 to 5 caster sizes off the caster; light elevations down to grazing.
+Invariants: no NaN or Inf in any image, visibility in [0, 1], identical
+output for identical input, visibility unchanged (within a measured
+tolerance) when the whole scene is uniformly scaled and translated, and
+convergence to `hard` as the radius goes to 0.
+
+CI runs a derandomized handful of examples (`derandomize=True`: the same
+examples on every run); `pytest -m slow` runs many more.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pytest
+import trimesh
+from hypothesis import HealthCheck, given, reject, settings
+from hypothesis import strategies as st
+
+import penumbra
+from stress_scenes import FAST, METHODS, SIZE, check_images
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """Everything that defines a random scene, in units of the caster size."""
+
+    kind: str
+    size: float
+    height: float
+    yaw: float
+    second: str
+    radius: float
+    gap: float
+    elevation: float
+    azimuth: float
+
+    def build(self, scale: float = 1.0, offset: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> penumbra.Scene:
+        t = np.asarray(offset, dtype=np.float64)
+        place = lambda p: np.asarray(p, dtype=np.float64) * scale + t  # noqa: E731
+        meshes = [_mesh(_slab(), "ground", 0, place)]
+        caster = _caster(self.kind, self.size, self.height, self.yaw)
+        meshes.append(_mesh(caster, "caster", 1, place))
+        top = float(caster.bounds[1][1])
+        if self.second != "none":
+            # Touching: resting on the caster's top; intersecting: sunk into it.
+            sink = 0.0 if self.second == "touching" else 0.3 * self.size
+            other = trimesh.creation.box(extents=(0.5 * self.size,) * 3)
+            other.apply_translation((0.2 * self.size, top + 0.25 * self.size - sink, 0.1 * self.size))
+            meshes.append(_mesh(other, "second", 2, place))
+            top = float(other.bounds[1][1])
+        # The light looks down at the caster from `elevation` degrees; its
+        # surface is `gap` caster sizes beyond the casters' bounding sphere.
+        centre = np.array([0.0, self.height, 0.0])
+        reach = float(np.linalg.norm(np.vstack([m.vertices for m in meshes[1:]]) - place(centre), axis=1).max()) / scale
+        e, a = math.radians(self.elevation), math.radians(self.azimuth)
+        direction = np.array([math.cos(e) * math.cos(a), math.sin(e), math.cos(e) * math.sin(a)])
+        distance = reach + self.radius + self.gap * self.size
+        if self.elevation < 60.0:
+            # Low (grazing) lights must stand back for one shadow-map frustum
+            # (80 degrees half-angle) to cover the 4 x 4 slab; else SceneError.
+            distance += 12.0
+        light_centre = centre + direction * distance
+        light = penumbra.SphereLight(place(light_centre), self.radius * scale, intensity=40.0 * scale**2)
+        cam = penumbra.Camera(eye=place((0.0, 6.0, 7.0)), target=place((0.0, 0.5, 0.0)), fov_y=45.0, width=SIZE, height=SIZE)
+        return penumbra.Scene(meshes, light, cam, name="random")
+
+
+def _slab() -> trimesh.Trimesh:
+    m = trimesh.creation.box(extents=(4.0, 0.2, 4.0))
+    m.apply_translation((0.0, -0.1, 0.0))
+    return m
+
+
+def _caster(kind: str, size: float, height: float, yaw: float) -> trimesh.Trimesh:
+    if kind == "sphere":
+        m = trimesh.creation.icosphere(subdivisions=2, radius=0.5 * size)
+    elif kind == "box":
+        m = trimesh.creation.box(extents=(size, size, size))
+    else:  # needle: 1e-3 thin
+        m = trimesh.creation.box(extents=(size, 1e-3 * size, 1e-3 * size))
+    m.apply_transform(trimesh.transformations.rotation_matrix(math.radians(yaw), (0, 1, 0)))
+    m.apply_translation((0.0, height, 0.0))
+    return m
+
+
+def _mesh(m: trimesh.Trimesh, name: str, object_id: int, place: Any) -> penumbra.Mesh:
+    return penumbra.Mesh(place(m.vertices), m.faces, albedo=0.7, object_id=object_id, name=name)
+
+
+@st.composite
+def scene_specs(draw: st.DrawFn) -> SceneSpec:
+    size = draw(st.floats(0.3, 1.5))
+    kind = draw(st.sampled_from(["sphere", "box", "needle"]))
+    # Heights from sunk into the ground (intersecting) through touching to floating.
+    height = draw(st.sampled_from([0.3 * size, 0.5 * size])) if draw(st.booleans()) else draw(st.floats(0.6 * size, 2.5))
+    radius = draw(st.sampled_from([0.0, 1e-4 * size])) if draw(st.integers(0, 3)) == 0 else draw(st.floats(0.02, 2.5)) * size
+    return SceneSpec(
+        kind=kind,
+        size=size,
+        height=height,
+        yaw=draw(st.floats(0.0, 90.0)),
+        second=draw(st.sampled_from(["none", "none", "touching", "intersecting"])),
+        radius=radius,
+        gap=draw(st.sampled_from([1e-3, 1e-2])) if draw(st.booleans()) else draw(st.floats(0.05, 5.0)),
+        # Down to 10 degrees above the ground: grazing on the slab.
+        elevation=draw(st.floats(10.0, 90.0)),
+        azimuth=draw(st.floats(0.0, 360.0)),
+    )
+
+
+def render(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str) -> penumbra.RenderResult:
+    """Renders, or rejects the example when the scene is refused for the one
+    documented reason a valid random scene can have: a light near the
+    caster sees the slab beyond the 80-degree half-angle of one shadow-map
+    frustum (a typed SceneError naming it; omnidirectional maps are not
+    implemented)."""
+    try:
+        return renderer.render(scene, method, **FAST[method])
+    except penumbra.SceneError as e:
+        assert "surrounds the light" in str(e), e
+        reject()
+        raise
+
+
+CI = settings(max_examples=3, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])
+LONG = settings(max_examples=40, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])
+
+# Log10 of the uniform scale of the whole scene, from 1e-3 to 1e4.
+SCALES = st.integers(-3, 4)
+
+
+def _finite_in_range_and_deterministic(renderer: penumbra.Renderer, spec: SceneSpec, exponent: int, method: str) -> None:
+    scene = spec.build(scale=10.0**exponent)
+    a = render(renderer, scene, method)
+    check_images(a, f"{spec} at 1e{exponent}")
+    b = render(renderer, scene, method)
+    for key in a.images:
+        np.testing.assert_array_equal(a.images[key], b.images[key], err_msg=key)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@CI
+@given(spec=scene_specs(), exponent=SCALES)
+def test_random_scenes_are_finite_in_range_and_deterministic(renderer: penumbra.Renderer, method: str, spec: SceneSpec, exponent: int) -> None:
+    _finite_in_range_and_deterministic(renderer, spec, exponent, method)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", METHODS)
+@LONG
+@given(spec=scene_specs(), exponent=SCALES)
+def test_random_scenes_are_finite_in_range_and_deterministic_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec, exponent: int) -> None:
+    _finite_in_range_and_deterministic(renderer, spec, exponent, method)
+
+
+# Visibility of the same scene at another scale and place. Measured by
+# `XDG_RUNTIME_DIR=/tmp python3 benchmarks/stability.py --scenes 20` (seed 8:
+# 20 random scenes from the ranges of `scene_specs`/`SCALES`, 19 rendered,
+# one refused; 32x32, FAST parameters): hard, pcf, pcss, pvm and reference
+# gave identical visibility in every case (fraction of pixels differing by
+# more than 0.1: max 0.0000; mean absolute difference: max 0.0000). The
+# bounds allow two pixels of 1024 and a mean of 1e-3 on top of that measured
+# 0, for float32 rounding moving a texel boundary in scenes not yet seen.
+# pvmf is NOT invariant: max 0.1182 of pixels differing by more than 0.1
+# (p99 0.1178, median 0.0088), mean difference max 0.0312: a bug found by the
+# measurement (docs/stability.md), not fixed: the worst measured scene is
+# an expected failure below; the derandomized CI examples happen to stay
+# within the bounds for pvmf too, the slow variant is expected to fail.
+MISMATCH_FRACTION = 2 / 1024
+MEAN_DIFFERENCE = 1e-3
+
+
+def visibility_difference(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    d = np.abs(a.astype(np.float64) - b.astype(np.float64))
+    return float((d > 0.1).mean()), float(d.mean())
+
+
+def _scale_and_translation_invariant(renderer: penumbra.Renderer, spec: SceneSpec, exponent: int, method: str) -> None:
+    base = render(renderer, spec.build(), method)
+    s = 10.0**exponent
+    moved = render(renderer, spec.build(scale=s, offset=(3.0 * s, -2.0 * s, 5.0 * s)), method)
+    check_images(moved)
+    frac, mean = visibility_difference(base.visibility, moved.visibility)
+    assert frac <= MISMATCH_FRACTION and mean <= MEAN_DIFFERENCE, f"{spec} scaled by 1e{exponent}: {frac:.4f} of pixels differ, mean {mean:.4f}"
+
+
+@pytest.mark.parametrize("method", METHODS)
+@CI
+@given(spec=scene_specs(), exponent=SCALES)
+def test_uniform_scale_and_translation_leave_visibility_unchanged(renderer: penumbra.Renderer, method: str, spec: SceneSpec, exponent: int) -> None:
+    _scale_and_translation_invariant(renderer, spec, exponent, method)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", METHODS)
+@LONG
+@given(spec=scene_specs(), exponent=SCALES)
+def test_uniform_scale_and_translation_leave_visibility_unchanged_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec, exponent: int) -> None:
+    _scale_and_translation_invariant(renderer, spec, exponent, method)
+
+
+@pytest.mark.xfail(strict=True, reason="pvmf is not scale+translation invariant (benchmarks/stability.py; docs/stability.md); not fixed")
+def test_pvmf_worst_measured_scene_is_scale_and_translation_invariant(renderer: penumbra.Renderer) -> None:
+    """The largest pvmf difference benchmarks/stability.py found (seed 8): 0.1182 of the pixels."""
+    spec = SceneSpec("sphere", 1.2829627341064935, 2.1686630364650665, 61.79789065224047, "touching", 2.2453816619167126, 0.01, 79.80142386110028, 133.13616364973657)
+    _scale_and_translation_invariant(renderer, spec, 1, "pvmf")
+
+
+# As the radius goes to 0, every method but pcf (whose kernel is fixed in
+# texels, independent of the light) tends to `hard`: the fraction of pixels
+# differing from `hard` by more than 0.5 at radius 1e-5 caster sizes
+# (single texels on outlines, where the methods' own biases and sampling
+# differ from hard's). Measured by the same command as above (19 scenes per
+# method): max 0.0010 pcss, 0.0000 pvm, 0.0098 pvmf (p99 0.0094, median
+# 0.0020), 0.0020 reference; over all four max 0.0098, p99 0.0083. Bound:
+# 1.5 x the largest measured value (0.0098 is 10 pixels of 1024; 0.015 is 15).
+CONVERGED_MISMATCH = 0.015
+SOFT_METHODS = [m for m in METHODS if m not in ("hard", "pcf")]
+
+
+def _converges_to_hard(renderer: penumbra.Renderer, spec: SceneSpec, method: str) -> None:
+    from dataclasses import replace
+
+    hard = render(renderer, replace(spec, radius=0.0).build(), "hard").visibility
+    tiny = render(renderer, replace(spec, radius=1e-5 * spec.size).build(), method).visibility
+    mismatch = float((np.abs(tiny - hard) > 0.5).mean())
+    assert mismatch <= CONVERGED_MISMATCH, f"{spec}: {mismatch:.4f} of pixels differ from hard"
+    wide = render(renderer, replace(spec, radius=0.5 * spec.size).build(), method).visibility
+    # Smaller lights are closer to hard than larger ones (or equally close).
+    assert np.abs(tiny - hard).mean() <= np.abs(wide - hard).mean() + 1e-3
+
+
+@pytest.mark.parametrize("method", SOFT_METHODS)
+@CI
+@given(spec=scene_specs())
+def test_small_radius_converges_to_hard(renderer: penumbra.Renderer, method: str, spec: SceneSpec) -> None:
+    _converges_to_hard(renderer, spec, method)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", SOFT_METHODS)
+@LONG
+@given(spec=scene_specs())
+def test_small_radius_converges_to_hard_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec) -> None:
+    _converges_to_hard(renderer, spec, method)
+
+
+def test_pcf_with_a_zero_kernel_is_hard(renderer: penumbra.Renderer) -> None:
+    spec = SceneSpec("box", 1.0, 1.5, 20.0, "none", 0.3, 1.0, 70.0, 30.0)
+    scene = spec.build()
+    hard = render(renderer, scene, "hard").visibility
+    pcf = renderer.render(scene, "pcf", map_size=256, kernel=0.0).visibility
+    assert float((np.abs(pcf - hard) > 0.5).mean()) <= CONVERGED_MISMATCH
