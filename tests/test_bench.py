@@ -102,3 +102,7 @@ def test_quick_run_writes_every_output_and_its_numbers_hold(renderer: object, tm
     assert "time / Mitsuba at equal error" in ratios
     machine = (tmp_path / "machine.md").read_text()
     assert "commit:" in machine and "adapter:" in machine
+    import penumbra
+
+    if penumbra.adapter_info()["is_software"]:
+        assert "timing: cpu_clock" in machine and {r["timing_source"] for r in rows} == {"cpu_clock"}

@@ -219,7 +219,7 @@ def make_renderer() -> Renderer:
     are unreliable); every pass is recomputed on every render."""
     from penumbra.render import adapter_info
 
-    timing = "cpu" if adapter_info().get("software") else "auto"
+    timing = "cpu" if adapter_info().get("is_software") else "auto"
     return Renderer(timing, pass_cache=False)
 
 
@@ -229,6 +229,7 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
     out.mkdir(parents=True, exist_ok=True)
     renderer = make_renderer()
     start = time.perf_counter()
+    commit = _commit()  # before the run: what was measured
     rows: list[dict[str, Any]] = []
     implemented = methods()
     unknown = [m for m in cfg.methods if m not in implemented]
@@ -281,7 +282,7 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
     if scaling_rows:
         _write_csv(out / "scaling.csv", scaling_rows)
         plot_scaling(scaling_rows, out / "scaling.png")
-    (out / "machine.md").write_text(machine_description(renderer, cfg, time.perf_counter() - start))
+    (out / "machine.md").write_text(machine_description(renderer, cfg, time.perf_counter() - start, commit))
     log((out / "ratios.md").read_text())
     log(f"wrote {out}/results.csv, pareto.png, pareto.md, ratios.md, machine.md" + (", scaling.csv, scaling.png" if scaling_rows else ""))
     return rows
@@ -481,7 +482,7 @@ def _cpu() -> str:
     return platform.processor() or "unknown"
 
 
-def machine_description(renderer: Renderer, cfg: BenchConfig, seconds: float) -> str:
+def machine_description(renderer: Renderer, cfg: BenchConfig, seconds: float, commit: str) -> str:
     import mitsuba
 
     import penumbra
@@ -497,10 +498,10 @@ def machine_description(renderer: Renderer, cfg: BenchConfig, seconds: float) ->
     lines = [
         f"# Benchmark `{cfg.name}`",
         "",
-        f"- commit: {_commit()}",
-        f"- date: {time.strftime('%Y-%m-%d %H:%M %Z')}",
+        f"- commit: {commit}",
+        f"- finished: {time.strftime('%Y-%m-%d %H:%M %Z')}",
         f"- machine: {platform.platform()}; CPU {_cpu()}, {os.cpu_count()} logical cores; memory {memory}",
-        f"- adapter: {info.get('name')} ({info.get('backend')}, {info.get('device_type')}, driver {info.get('driver')}); software: {info.get('software')}",
+        f"- adapter: {info.get('name')} ({info.get('backend')}, {info.get('device_type')}, {info.get('driver_info')}); software: {info.get('is_software')}",
         f"- timing: {renderer.timing_source} (GPU timestamps on hardware; CPU clocks around each pass on a software adapter)",
         f"- Mitsuba {mitsuba.__version__}, variant {pm.variant()}, on the CPU",
         f"- penumbra {penumbra.__version__}, numpy {np.__version__}, Python {sys.version.split()[0]}",
