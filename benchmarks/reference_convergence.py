@@ -29,6 +29,7 @@ def main() -> None:
     parser.add_argument("--samples", type=int, nargs="+", default=[16, 64, 256, 1024])
     parser.add_argument("--sampling", nargs="+", default=["sphere", "disk"], choices=["sphere", "disk"])
     parser.add_argument("--scenes", nargs="+", default=penumbra.scenes.names())
+    parser.add_argument("--beyond", type=int, help="also one sphere render at this many samples, against the criterion of the largest --samples")
     args = parser.parse_args()
     args.samples = sorted(args.samples)
     renderer = penumbra.Renderer(timing="cpu", pass_cache=False)
@@ -68,6 +69,10 @@ def main() -> None:
                 f"{'yes' if error <= bound else 'no'} |"
             )
             print(parts[-1], flush=True)
+            if args.beyond:
+                far = metrics.rmse(renderer.render(scene, "reference", n_samples=args.beyond).visibility, gt.visibility, region)
+                parts.append(f"| {name} | {sampling}, n = {args.beyond} | {far:.4f} | | | | {bound:.4f} (n = {n_max}) | {'yes' if far <= bound else 'no'} |")
+                print(parts[-1], flush=True)
     print()
     print("\n".join(convergence))
     print()
