@@ -60,7 +60,7 @@ def test_the_repository_config_loads_full_and_quick() -> None:
         ("scenes = ['no_such_scene']\n", "unknown scenes ['no_such_scene']"),
         ("scenes = ['sphere_on_plane']\n[methods]\nhard = 3\n", "methods.hard must be a table"),
         ("scenes = [\n", "not valid TOML"),
-        ("scenes = ['sphere_on_plane']\n[quick]\nrepeats = 'two'\n", "[quick]: 'repeats' must be a int"),
+        ("scenes = ['sphere_on_plane']\n[quick]\nrepeats = 'two'\n", "[quick]: 'repeats' must be an integer"),
     ],
 )
 def test_bad_configs_name_the_problem(tmp_path: Path, text: str, message: str) -> None:

@@ -100,7 +100,8 @@ def _checked(values: dict[str, Any], where: str) -> dict[str, Any]:
         if want is float and isinstance(value, int) and not isinstance(value, bool):
             continue
         if not isinstance(value, want) or isinstance(value, bool):
-            raise ParameterError(f"{where}: {key!r} must be a {want.__name__}, got {value!r}")
+            kind = {list: "a list", int: "an integer", float: "a number", dict: "a table"}[want]
+            raise ParameterError(f"{where}: {key!r} must be {kind}, got {value!r}")
     for key in ("size", "ground_truth_spp", "repeats"):
         if key in values and values[key] < 1:
             raise ParameterError(f"{where}: {key!r} must be at least 1, got {values[key]}")
@@ -243,6 +244,7 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
             configs += [("method", method, p) for p in expand(grids) if (method, p) != ("hard", {})]
         configs += [("peer", "reference", {"n_samples": n}) for n in cfg.peers.get("reference_samples", [])]
         hard_ms = math.nan
+        object_id = None
         for kind, method, params in configs:
             result, passes, repeats = _median_render(renderer, scene, method, params, cfg)
             row: dict[str, Any] = {
@@ -255,6 +257,7 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
             row["time_over_hard"] = row["total_ms"] / hard_ms
             row.update({f"ms_{k}": v for k, v in passes.items()})
             row.update(metrics.compare(result, gt))
+            object_id = result.object_id
             row.update({f"stat_{k}": v for k, v in result.stats.items()})
             rows.append(row)
             log(f"{scene_name:20s} {method:9s} {row['label']:50.50s} {row['total_ms']:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
@@ -264,7 +267,8 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
         for spp in spps:
             vis_ms, images, repeats = _mitsuba_ms(scene, spp, "visibility", cfg)
             rad_ms, rad, _ = _mitsuba_ms(scene, spp, "radiance", cfg)
-            m = metrics.compare_images(images["visibility"], gt, radiance=rad["radiance"])
+            # The same silhouette pixels left out of the radiance metrics as for the methods.
+            m = metrics.compare_images(images["visibility"], gt, radiance=rad["radiance"], object_id=object_id)
             row = {
                 "scene": scene_name, "kind": "peer", "method": "mitsuba", "label": f"spp={spp}",
                 "params": json.dumps({"spp": spp, "variant": pm.variant()}), "repeats": repeats,
