@@ -51,8 +51,8 @@ def test_threads_give_the_serial_images_for_every_method_long(renderer: penumbra
 
 # The run happens in a fresh interpreter so other tests' allocations do not
 # blur the measurement: it renders one method `n` times after a warm-up
-# (the light radius cycling through 97 values) and prints the resident set
-# before and after.
+# (the light radius cycling through 97 values; no pass cache, so every pass
+# runs every time) and prints the resident set before and after.
 LOOP = textwrap.dedent(
     """
     import gc, sys
@@ -61,7 +61,7 @@ LOOP = textwrap.dedent(
     from stress_scenes import FAST
     from test_long_runs import rss_mib
     method, n = {method!r}, {n}
-    r = penumbra.Renderer()
+    r = penumbra.Renderer(pass_cache=False)
     def one(i):
         scene = penumbra.scenes.get("overlapping_casters", width=32, height=32, light_radius=0.2 + 0.001 * (i % 97))
         r.render(scene, method, **FAST[method])
@@ -85,34 +85,23 @@ def rss_growth(method: str, n: int) -> tuple[float, float]:
     return start, end
 
 
-# Growth allowed after warm-up: pcf, pcss and pvmf measured 0.0 MiB over 100
-# renders; 8 MiB leaves room for allocator noise while catching a leak of
-# 0.15 MiB per render over 60 renders.
+# Growth allowed after warm-up: every method measured 0.0 MiB over 60
+# renders once compute passes stopped reading uniform buffers (lavapipe
+# recompiled, and kept, a shader per dispatch that branched on uniform
+# values: 0.3 MiB per render for hard, 4.9 for reference with 16 samples;
+# docs/stability.md). 8 MiB leaves room for allocator noise while catching a
+# leak of 0.15 MiB per render over 60 renders.
 SHORT_RUNS, LONG_RUNS, ALLOWANCE_MIB = 60, 2000, 8.0
-# Found by this test and not fixed yet: the resident set grows linearly
-# with hard (about 0.3 MiB per render), pvm (0.4) and reference (4.9 with
-# 16 light samples, about 0.3 per shadow map), on lavapipe; pcf, pcss and
-# pvmf do not grow. Traced to running the visibility compute pipeline
-# itself (skipping hard's dispatch removes the growth; what grows is malloc
-# heap plus JIT-compiled code, so llvmpipe compiles something per dispatch);
-# not the textureLoad of the depth map alone (pcss and pvmf use it too, and a
-# minimal program does not grow). Cause not found yet: docs/stability.md.
-LEAKING = {"hard", "pvm", "reference"}
 
 
-def rss_cases() -> list:
-    reason = "resident set grows ~0.3 MiB per visibility dispatch of hard/pvm/reference on lavapipe (docs/stability.md); not fixed yet"
-    return [pytest.param(m, marks=[pytest.mark.xfail(strict=True, reason=reason)] if m in LEAKING else []) for m in METHODS]
-
-
-@pytest.mark.parametrize("method", rss_cases())
+@pytest.mark.parametrize("method", METHODS)
 def test_many_renders_keep_memory_stable(method: str) -> None:
     start, end = rss_growth(method, SHORT_RUNS)
     assert end - start <= ALLOWANCE_MIB, f"resident set grew from {start:.1f} to {end:.1f} MiB over {SHORT_RUNS} {method} renders"
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("method", rss_cases())
+@pytest.mark.parametrize("method", METHODS)
 def test_thousands_of_renders_keep_memory_stable(method: str) -> None:
     start, end = rss_growth(method, LONG_RUNS)
     assert end - start <= ALLOWANCE_MIB, f"resident set grew from {start:.1f} to {end:.1f} MiB over {LONG_RUNS} {method} renders"

@@ -1,6 +1,8 @@
 //! Small builders for bind-group layout entries and textures, so each pass
 //! states *what* it binds rather than repeating wgpu's descriptors.
 
+use wgpu::util::DeviceExt;
+
 pub fn texture(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -75,6 +77,31 @@ pub fn uniform(binding: u32) -> wgpu::BindGroupLayoutEntry {
         },
         count: None,
     }
+}
+
+/// The parameter block of a compute pass (`var<storage, read>` in WGSL).
+///
+/// Compute passes take their per-dispatch parameters from read-only storage
+/// buffers, never from uniform buffers. Mesa's lavapipe (22.x, the CI's and
+/// many headless machines' Vulkan) "inlines" uniform-buffer values that decide
+/// a branch: on every bind it recompiles the shader with the values folded in
+/// and, when that removes enough code, keeps doing so for every later dispatch
+/// without freeing the old machine code (about 0.16 MiB and an LLVM compile
+/// per dispatch; docs/stability.md, "Resident set"). Storage buffers are not
+/// inlined. On GPUs a small read-only storage buffer read uniformly costs the
+/// same as a uniform buffer here: a few loads per invocation.
+/// `tests/shader_validation.rs` keeps uniform buffers out of shaders that branch.
+pub fn parameters(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry { visibility: wgpu::ShaderStages::COMPUTE, ..storage_buffer(binding) }
+}
+
+/// A buffer holding `value` for a [`parameters`] binding.
+pub fn parameter_buffer<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, value: &T) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::bytes_of(value),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
 }
 
 pub fn storage_buffer(binding: u32) -> wgpu::BindGroupLayoutEntry {

@@ -13,7 +13,6 @@
 
 use std::collections::BTreeMap;
 
-use wgpu::util::DeviceExt;
 
 use crate::error::Result;
 use crate::gpu::{layout, PassTimestamps};
@@ -150,7 +149,7 @@ impl HardShadow {
                 layout::float_texture(0),
                 layout::float_texture(1),
                 layout::depth_texture(2),
-                layout::uniform(3),
+                layout::parameters(3),
                 layout::storage_texture(4, VISIBILITY_FORMAT),
             ],
         );
@@ -172,11 +171,7 @@ impl HardShadow {
         visibility: &wgpu::Texture,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
-        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("hard::uniforms"),
-            contents: bytemuck::bytes_of(&params.uniform(frustum, light_center, 0.0, 0)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let uniforms = layout::parameter_buffer(device, "hard::uniforms", &params.uniform(frustum, light_center, 0.0, 0));
         let map_view = layout::view(shadow_map);
         let visibility_view = layout::view(visibility);
         let bind_group = layout::bind_group(

@@ -4,7 +4,7 @@
 @group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
 @group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
-@group(0) @binding(3) var<uniform> hard: ShadowTest;
+@group(0) @binding(3) var<storage, read> hard: ShadowTest;
 @group(0) @binding(4) var visibility_out: texture_storage_2d<r32float, write>;
 
 @compute @workgroup_size(8, 8)

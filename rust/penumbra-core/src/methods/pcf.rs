@@ -12,7 +12,6 @@
 
 use std::collections::BTreeMap;
 
-use wgpu::util::DeviceExt;
 
 use crate::error::Result;
 use crate::gpu::{layout, PassTimestamps};
@@ -128,8 +127,8 @@ impl PercentageCloserFiltering {
                 layout::float_texture(1),
                 layout::depth_texture(2),
                 layout::comparison_sampler(3),
-                layout::uniform(4),
-                layout::uniform(5),
+                layout::parameters(4),
+                layout::parameters(5),
                 layout::storage_texture(6, VISIBILITY_FORMAT),
             ],
         );
@@ -152,22 +151,14 @@ impl PercentageCloserFiltering {
         visibility: &wgpu::Texture,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
-        let test = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pcf::shadow_test_uniforms"),
-            contents: bytemuck::bytes_of(&params.shadow.uniform(frustum, light_center, 0.0, 0)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let test = layout::parameter_buffer(device, "pcf::shadow_test_uniforms", &params.shadow.uniform(frustum, light_center, 0.0, 0));
         let kernel = PcfUniform {
             kernel: params.kernel,
             samples: params.samples,
             seed: params.seed,
             nearest: u32::from(params.filter == Filter::Nearest),
         };
-        let kernel = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pcf::kernel_uniforms"),
-            contents: bytemuck::bytes_of(&kernel),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let kernel = layout::parameter_buffer(device, "pcf::kernel_uniforms", &kernel);
         let map_view = layout::view(shadow_map);
         let visibility_view = layout::view(visibility);
         let bind_group = layout::bind_group(

@@ -17,8 +17,8 @@ struct PcfKernel {
 @group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
-@group(0) @binding(4) var<uniform> shadow: ShadowTest;
-@group(0) @binding(5) var<uniform> pcf: PcfKernel;
+@group(0) @binding(4) var<storage, read> shadow: ShadowTest;
+@group(0) @binding(5) var<storage, read> pcf: PcfKernel;
 @group(0) @binding(6) var visibility_out: texture_storage_2d<r32float, write>;
 
 fn pcf_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> f32 {

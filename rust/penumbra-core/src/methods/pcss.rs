@@ -134,8 +134,8 @@ impl PercentageCloserSoftShadows {
                 layout::float_texture(1),
                 layout::depth_texture(2),
                 layout::comparison_sampler(3),
-                layout::uniform(4),
-                layout::uniform(5),
+                layout::parameters(4),
+                layout::parameters(5),
                 layout::storage_texture(6, VISIBILITY_FORMAT),
                 layout::storage_texture(7, VISIBILITY_FORMAT),
                 layout::storage_texture(8, VISIBILITY_FORMAT),
@@ -171,22 +171,14 @@ impl PercentageCloserSoftShadows {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             }),
         };
-        let test = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pcss::shadow_test_uniforms"),
-            contents: bytemuck::bytes_of(&params.shadow.uniform(frustum, light.0, light.1, 0)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let test = layout::parameter_buffer(device, "pcss::shadow_test_uniforms", &params.shadow.uniform(frustum, light.0, light.1, 0));
         let sampling = PcssUniform {
             blocker_samples: params.blocker_samples,
             filter_samples: params.filter_samples,
             seed: params.seed,
             poisson: u32::from(params.sampling == Sampling::Poisson),
         };
-        let sampling = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pcss::sampling_uniforms"),
-            contents: bytemuck::bytes_of(&sampling),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let sampling = layout::parameter_buffer(device, "pcss::sampling_uniforms", &sampling);
         let views = [shadow_map, visibility, &frame.penumbra_width, &frame.blocker_depth].map(layout::view);
         let bind_group = layout::bind_group(
             device,

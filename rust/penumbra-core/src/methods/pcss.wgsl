@@ -31,8 +31,8 @@ struct PcssPixel {
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
 // center.w: the light's radius.
-@group(0) @binding(4) var<uniform> shadow: ShadowTest;
-@group(0) @binding(5) var<uniform> pcss: PcssSampling;
+@group(0) @binding(4) var<storage, read> shadow: ShadowTest;
+@group(0) @binding(5) var<storage, read> pcss: PcssSampling;
 @group(0) @binding(6) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(7) var width_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var blocker_out: texture_storage_2d<r32float, write>;

@@ -280,7 +280,7 @@ impl PenumbraVolumeMaps {
                 layout::depth_texture(3),
                 layout::float_texture(4),
                 layout::float_texture(5),
-                layout::uniform(6),
+                layout::parameters(6),
                 layout::storage_texture(7, VISIBILITY_FORMAT),
                 layout::storage_texture(8, VISIBILITY_FORMAT),
                 layout::storage_buffer_rw(9),
@@ -384,11 +384,7 @@ impl PenumbraVolumeMaps {
         timestamps: Option<PassTimestamps<'_>>,
     ) {
         let flags = u32::from(params.falloff);
-        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvm::visibility_uniforms"),
-            contents: bytemuck::bytes_of(&params.shadow.uniform(frustum, light.0, light.1, flags)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let uniforms = layout::parameter_buffer(device, "pvm::visibility_uniforms", &params.shadow.uniform(frustum, light.0, light.1, flags));
         let v = &frame.volumes;
         let views = [shadow_map, &v.volume_depth, &v.edge0, &v.edge1, visibility, &frame.membership].map(layout::view);
         let bind_group = layout::bind_group(

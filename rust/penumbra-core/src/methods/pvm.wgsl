@@ -12,7 +12,7 @@
 @group(0) @binding(4) var edge0_map: texture_2d<f32>;
 @group(0) @binding(5) var edge1_map: texture_2d<f32>;
 // mode.y bit 0: falloff.
-@group(0) @binding(6) var<uniform> pvm: ShadowTest;
+@group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var<storage, read_write> pixels_in_volume: atomic<u32>;

@@ -356,8 +356,8 @@ impl PenumbraVolumeMaskFiltering {
                 layout::depth_texture(3),
                 layout::float_texture(4),
                 layout::comparison_sampler(5),
-                layout::uniform(6),
-                layout::uniform(7),
+                layout::parameters(6),
+                layout::parameters(7),
                 layout::storage_texture(8, VISIBILITY_FORMAT),
                 layout::storage_texture(9, VISIBILITY_FORMAT),
                 layout::storage_texture(10, VISIBILITY_FORMAT),
@@ -372,7 +372,7 @@ impl PenumbraVolumeMaskFiltering {
                 layout::float_texture(0),
                 layout::float_texture(1),
                 layout::float_texture(2),
-                layout::uniform(3),
+                layout::parameters(3),
                 layout::storage_texture(4, VISIBILITY_FORMAT),
                 layout::storage_buffer_rw(5),
             ],
@@ -480,16 +480,8 @@ impl PenumbraVolumeMaskFiltering {
     ) {
         let size = gbuffer.size;
         let (test, settings) = estimate_uniforms(params, frustum, light);
-        let test = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvmf::test_uniforms"),
-            contents: bytemuck::bytes_of(&test),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let settings = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvmf::settings"),
-            contents: bytemuck::bytes_of(&settings),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let test = layout::parameter_buffer(device, "pvmf::test_uniforms", &test);
+        let settings = layout::parameter_buffer(device, "pvmf::settings", &settings);
         let e = estimate;
         let views = [shadow_map, &mask.mask_depth, &mask.edge_distance, &e.raw, &e.blur_mask, &e.filter_width].map(layout::view);
         let bind_group = layout::bind_group(
@@ -534,11 +526,7 @@ impl PenumbraVolumeMaskFiltering {
         let half_width = (params.n_blur / 2) as i32;
         let steps = [(raw, &temporary, [1, 0], true), (&temporary, visibility, [0, 1], false)];
         for (source, destination, step, first) in steps {
-            let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("pvmf::blur_uniforms"),
-                contents: bytemuck::bytes_of(&BlurUniform { step, half_width, count: u32::from(first) }),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+            let uniforms = layout::parameter_buffer(device, "pvmf::blur_uniforms", &BlurUniform { step, half_width, count: u32::from(first) });
             let views = [source, &estimate.blur_mask, destination].map(layout::view);
             let bind_group = layout::bind_group(
                 device,

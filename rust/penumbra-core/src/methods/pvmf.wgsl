@@ -11,7 +11,7 @@
 @group(0) @binding(4) var edge_distance: texture_2d<f32>;
 @group(0) @binding(5) var shadow_sampler: sampler_comparison;
 // center.w: the light's radius r.
-@group(0) @binding(6) var<uniform> pvmf: ShadowTest;
+@group(0) @binding(6) var<storage, read> pvmf: ShadowTest;
 
 struct PvmfSettings {
     s_p: f32,
@@ -21,7 +21,7 @@ struct PvmfSettings {
     // fail the shadow-map test outside every volume (else filter them, 5.2).
     flags: u32,
 };
-@group(0) @binding(7) var<uniform> settings: PvmfSettings;
+@group(0) @binding(7) var<storage, read> settings: PvmfSettings;
 @group(0) @binding(8) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var blur_mask_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(10) var filter_width_out: texture_storage_2d<r32float, write>;

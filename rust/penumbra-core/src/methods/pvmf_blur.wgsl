@@ -17,7 +17,7 @@ struct BlurSettings {
     // 1 on the pass that counts blurred pixels.
     count: u32,
 };
-@group(0) @binding(3) var<uniform> blur: BlurSettings;
+@group(0) @binding(3) var<storage, read> blur: BlurSettings;
 @group(0) @binding(4) var destination: texture_storage_2d<r32float, write>;
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 3>;
 

@@ -27,7 +27,6 @@
 use std::collections::BTreeMap;
 
 use glam::{DVec2, DVec3, Vec3};
-use wgpu::util::DeviceExt;
 
 use crate::error::Result;
 use crate::gpu::{layout, PassTimestamps};
@@ -227,6 +226,8 @@ pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: 
 /// half-angle is at most 90 degrees plus that, the whole sphere when the
 /// light is inside the bounding sphere.
 pub fn visible_cap_cos(distance: f64, bound: f64) -> f64 {
+    // Written so that a NaN distance or bound also gives the whole sphere.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(distance > bound) {
         return -1.0;
     }
@@ -259,10 +260,10 @@ impl ReferenceShadows {
                 layout::float_texture(0),
                 layout::float_texture(1),
                 layout::depth_texture(2),
-                layout::uniform(3),
+                layout::parameters(3),
                 layout::storage_buffer_rw(4),
                 layout::storage_texture(5, VISIBILITY_FORMAT),
-                layout::uniform(6),
+                layout::parameters(6),
             ],
         );
         let module = crate::shaders::module(device, "reference::shader", crate::shaders::reference());
@@ -325,21 +326,13 @@ impl ReferenceShadows {
             shadow_pass.record_part(device, encoder, &map, &frustum, depth, vertices, timestamps, (first, false));
             let mut test = params.shadow.uniform(&frustum, s.as_vec3().to_array(), 0.0, 0);
             test.set_center_w(sample.weight as f32);
-            let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("reference::sample_uniforms"),
-                contents: bytemuck::bytes_of(&test),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+            let uniforms = layout::parameter_buffer(device, "reference::sample_uniforms", &test);
             let normal = sample.normal.unwrap_or(DVec3::ZERO).as_vec3();
             let weight_uniform = SampleWeightUniform {
                 normal: [normal.x, normal.y, normal.z, if sample.normal.is_some() { 1.0 } else { 0.0 }],
                 light_center: [center.x as f32, center.y as f32, center.z as f32, 0.0],
             };
-            let weights = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("reference::sample_weight"),
-                contents: bytemuck::bytes_of(&weight_uniform),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+            let weights = layout::parameter_buffer(device, "reference::sample_weight", &weight_uniform);
             let bind_group = self.bind_group(device, gbuffer, &map_view, (&uniforms, &weights), &accumulated, &visibility_view);
             layout::dispatch_per_pixel_writes(encoder, "reference::accumulate_pass", &self.accumulate, &bind_group, gbuffer.size, None);
             if i == last {

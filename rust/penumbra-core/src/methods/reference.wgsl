@@ -8,7 +8,7 @@
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
 // The shadow test from one light sample; center.xyz = the sample, center.w =
 // its weight: 1/n (equal weights), or the inverse of its sampling density.
-@group(0) @binding(3) var<uniform> sample_test: ShadowTest;
+@group(0) @binding(3) var<storage, read> sample_test: ShadowTest;
 // Per pixel: (sum of weight * visibility, sum of weights).
 @group(0) @binding(4) var<storage, read_write> accumulated: array<vec2<f32>>;
 @group(0) @binding(5) var visibility_out: texture_storage_2d<r32float, write>;
@@ -19,7 +19,7 @@ struct SampleWeight {
     // The light's centre (xyz).
     light_center: vec4<f32>,
 };
-@group(0) @binding(6) var<uniform> sample_weight: SampleWeight;
+@group(0) @binding(6) var<storage, read> sample_weight: SampleWeight;
 
 // The weight of the sample for a receiver at p. With `sphere` sampling it is
 // the solid angle of the sample's patch seen from p (Herf 4.1's form factor

@@ -34,7 +34,7 @@ impl ShadingPass {
                 layout::float_texture(1),
                 layout::float_texture(2),
                 layout::storage_buffer(3),
-                layout::uniform(4),
+                layout::parameters(4),
                 layout::storage_texture(5, RADIANCE_FORMAT),
             ],
         );
@@ -79,16 +79,12 @@ impl ShadingPass {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let l = &scene.light;
-        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("shading::uniforms"),
-            contents: bytemuck::bytes_of(&ShadingUniforms {
+        let uniforms = layout::parameter_buffer(device, "shading::uniforms", &ShadingUniforms {
                 light: [l.center[0], l.center[1], l.center[2], l.radius],
                 intensity: [l.intensity[0], l.intensity[1], l.intensity[2], 0.0],
                 ambient: [scene.ambient[0], scene.ambient[1], scene.ambient[2], 0.0],
                 eye: [eye[0], eye[1], eye[2], 0.0],
-            }),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+            });
         let visibility_view = layout::view(visibility);
         let radiance_view = layout::view(radiance);
         let bind_group = layout::bind_group(

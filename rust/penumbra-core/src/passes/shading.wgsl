@@ -16,7 +16,7 @@ struct ShadingUniforms {
 @group(0) @binding(2) var visibility: texture_2d<f32>;
 // Per mesh: albedo rgb, unused.
 @group(0) @binding(3) var<storage, read> materials: array<vec4<f32>>;
-@group(0) @binding(4) var<uniform> shading: ShadingUniforms;
+@group(0) @binding(4) var<storage, read> shading: ShadingUniforms;
 @group(0) @binding(5) var radiance_out: texture_storage_2d<rgba32float, write>;
 
 // Irradiance from a uniform sphere of intensity I and radius r at distance d,
