@@ -2,48 +2,27 @@
 //! methods (issue 8): topology, silhouettes (Cournia 4.1.1), PVM's penumbra
 //! volumes (4.1.2) and PVMF's mask volumes (5.1). No GPU needed.
 //!
-//! proptest is not in the offline registry this project builds from, so the
-//! random cases come from a small deterministic generator (xorshift64*): the
-//! same cases on every run, a failure names its case index.
+//! The random cases come from proptest with a fixed seed: the same cases on
+//! every run, and a failure is shrunk to a small case and printed.
 
 use glam::{DMat3, DVec3};
 use penumbra_core::methods::pvm::{penumbra_volumes, silhouette, SilhouetteEdge};
 use penumbra_core::methods::pvmf::{mask_volumes, Offsets};
 use penumbra_core::topology::Topology;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, RngSeed};
 
-/// xorshift64* (Vigna 2016): deterministic, no dependencies.
-struct Rng(u64);
+/// `cases` cases from a fixed seed, with no failure files written.
+fn config(cases: u32) -> Config {
+    Config { cases, rng_seed: RngSeed::Fixed(0x9E37_79B9_7F4A_7C15), failure_persistence: None, ..Config::default() }
+}
 
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    /// Log-uniform in [lo, hi].
-    fn log_range(&mut self, lo: f64, hi: f64) -> f64 {
-        (lo.ln() + (hi.ln() - lo.ln()) * self.unit()).exp()
-    }
-    fn direction(&mut self) -> DVec3 {
-        loop {
-            let v = DVec3::new(self.range(-1.0, 1.0), self.range(-1.0, 1.0), self.range(-1.0, 1.0));
-            let len = v.length();
-            if len > 0.1 && len <= 1.0 {
-                return v / len;
-            }
-        }
-    }
-    fn rotation(&mut self) -> DMat3 {
-        DMat3::from_axis_angle(self.direction(), self.range(0.0, std::f64::consts::TAU))
-    }
+/// A unit vector, uniform over directions (rejection from the cube).
+fn direction() -> impl Strategy<Value = DVec3> {
+    [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64]
+        .prop_map(DVec3::from_array)
+        .prop_filter("inside the unit ball, not near its centre", |v| v.length() > 0.1 && v.length() <= 1.0)
+        .prop_map(|v| v.normalize())
 }
 
 /// A closed mesh: box, octahedron, tetrahedron or a UV sphere (counter-clockwise outward).
@@ -97,6 +76,44 @@ fn finite(v: &[[f32; 3]]) -> bool {
 
 /// One random case: a shape scaled by 1e-3..1e4, rotated and placed, and a
 /// light off it (radius 0 to several times the shape, gap down to 1e-6 of the size).
+#[derive(Debug, Clone)]
+struct CaseParams {
+    /// Box, octahedron, tetrahedron or UV sphere (`shape`).
+    kind: u64,
+    scale: f64,
+    axis: DVec3,
+    angle: f64,
+    /// The shape's centre is `offset * scale` along `offset_direction`.
+    offset_direction: DVec3,
+    offset: f64,
+    /// The light's radius and the gap between its surface and the shape's
+    /// bounding ball, in units of `scale`.
+    radius: f64,
+    gap: f64,
+    light_direction: DVec3,
+}
+
+fn case_params() -> impl Strategy<Value = CaseParams> {
+    let radius = prop_oneof![
+        1 => Just(0.0),
+        1 => (-6.0..-2.0f64).prop_map(|e| 10f64.powf(e)),
+        2 => 0.01..3.0f64,
+    ];
+    (0..4u64, -3.0..4.0f64, direction(), 0.0..std::f64::consts::TAU, direction(), 0.0..10.0f64, radius, -6.0..1.0f64, direction()).prop_map(
+        |(kind, scale, axis, angle, offset_direction, offset, radius, gap, light_direction)| CaseParams {
+            kind,
+            scale: 10f64.powf(scale),
+            axis,
+            angle,
+            offset_direction,
+            offset,
+            radius,
+            gap: 10f64.powf(gap),
+            light_direction,
+        },
+    )
+}
+
 struct Case {
     topology: Topology,
     l: DVec3,
@@ -104,85 +121,110 @@ struct Case {
     scale: f64,
 }
 
-fn random_case(rng: &mut Rng) -> Case {
-    let (p, f) = shape(rng.next());
-    let scale = rng.log_range(1e-3, 1e4);
-    let rot = rng.rotation();
-    let offset = rng.direction() * scale * rng.range(0.0, 10.0);
-    let p: Vec<DVec3> = p.iter().map(|&v| rot * v * scale + offset).collect();
-    let r = match rng.next() % 4 {
-        0 => 0.0,
-        1 => scale * rng.log_range(1e-6, 1e-2),
-        _ => scale * rng.range(0.01, 3.0),
-    };
+fn build(c: &CaseParams) -> Case {
+    let (p, f) = shape(c.kind);
+    let rot = DMat3::from_axis_angle(c.axis, c.angle);
+    let offset = c.offset_direction * c.scale * c.offset;
+    let p: Vec<DVec3> = p.iter().map(|&v| rot * v * c.scale + offset).collect();
+    let r = c.radius * c.scale;
     // The shape fits in a ball of radius sqrt(3) scale about `offset`; put the
     // light's surface `gap` beyond that ball (very close when gap is tiny).
-    let gap = scale * rng.log_range(1e-6, 10.0);
-    let l = offset + rng.direction() * (3f64.sqrt() * scale + r + gap);
-    Case { topology: Topology::build(&p, &f), l, r, scale }
+    let l = offset + c.light_direction * (3f64.sqrt() * c.scale + r + c.gap * c.scale);
+    Case { topology: Topology::build(&p, &f), l, r, scale: c.scale }
 }
 
-const CASES: usize = 2000;
+fn check_volumes(params: &CaseParams) -> Result<(), TestCaseError> {
+    let Case { topology, l, r, scale } = build(params);
+    topology.require_closed("shape", false).unwrap();
+    let edges = silhouette(&topology, l, false);
+    prop_assert!(!edges.is_empty(), "a closed shape seen from outside has a silhouette");
+    let reach = 100.0 * scale;
+    let (vertices, stats) = penumbra_volumes(&edges, l, r, reach);
+    prop_assert_eq!(stats.volume_quads, 2 * (edges.len() - stats.light_parallel_edges));
+    prop_assert_eq!(vertices.len(), 6 * stats.volume_quads);
+    for v in &vertices {
+        prop_assert!(finite(&[v.position, v.h0, v.h1]), "{v:?}");
+    }
+    // Every extruded corner lies no nearer the light's centre plane than
+    // its edge: volumes go away from the light (4.1.2's negation rule).
+    for quad in vertices.chunks(6) {
+        let (near, far) = (DVec3::from(quad[0].position.map(f64::from)), DVec3::from(quad[1].position.map(f64::from)));
+        let away = (near - l).normalize();
+        let step = far - near;
+        // f32 positions: 1e-5 of the reach is the rounding of the stored corners.
+        prop_assert!(
+            step.dot(away) >= -1e-5 * reach,
+            "an extrusion goes towards the light: r/scale {}, |l - edge|/scale {}, step.away/reach {}, edges {}",
+            r / scale,
+            (near - l).length() / scale,
+            step.dot(away) / reach,
+            edges.len()
+        );
+    }
+    for s_e in [0.5, 1.0] {
+        for offsets in [Offsets::Unit, Offsets::Radius] {
+            let (mask, stats) = mask_volumes(&edges, l, r, s_e, offsets, reach);
+            prop_assert_eq!(stats.mask_quads, 2 * (edges.len() - stats.light_parallel_edges));
+            prop_assert!(mask.iter().all(|m| finite(&[m.position]) && m.d_e.is_finite() && m.d_e > 0.0));
+        }
+    }
+    Ok(())
+}
 
-#[test]
-fn random_scenes_give_finite_oriented_volumes() {
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
-    for case in 0..CASES {
-        let Case { topology, l, r, scale } = random_case(&mut rng);
-        topology.require_closed("shape", false).unwrap();
-        let edges = silhouette(&topology, l, false);
-        assert!(!edges.is_empty(), "case {case}: a closed shape seen from outside has a silhouette");
-        let reach = 100.0 * scale;
-        let (vertices, stats) = penumbra_volumes(&edges, l, r, reach);
-        assert_eq!(stats.volume_quads, 2 * (edges.len() - stats.light_parallel_edges), "case {case}");
-        assert_eq!(vertices.len(), 6 * stats.volume_quads, "case {case}");
-        for v in &vertices {
-            assert!(finite(&[v.position, v.h0, v.h1]), "case {case}: {v:?}");
-        }
-        // Every extruded corner lies no nearer the light's centre plane than
-        // its edge: volumes go away from the light (4.1.2's negation rule).
-        for quad in vertices.chunks(6) {
-            let (near, far) = (DVec3::from(quad[0].position.map(f64::from)), DVec3::from(quad[1].position.map(f64::from)));
-            let away = (near - l).normalize();
-            let step = far - near;
-            // f32 positions: 1e-5 of the reach is the rounding of the stored corners.
-            assert!(
-                step.dot(away) >= -1e-5 * reach,
-                "case {case}: an extrusion goes towards the light: r/scale {}, |l - edge|/scale {}, step.away/reach {}, edges {}",
-                r / scale,
-                (near - l).length() / scale,
-                step.dot(away) / reach,
-                edges.len()
-            );
-        }
-        for s_e in [0.5, 1.0] {
-            for offsets in [Offsets::Unit, Offsets::Radius] {
-                let (mask, stats) = mask_volumes(&edges, l, r, s_e, offsets, reach);
-                assert_eq!(stats.mask_quads, 2 * (edges.len() - stats.light_parallel_edges), "case {case}");
-                assert!(mask.iter().all(|m| finite(&[m.position]) && m.d_e.is_finite() && m.d_e > 0.0), "case {case}");
-            }
-        }
+proptest! {
+    #![proptest_config(config(2000))]
+
+    #[test]
+    fn random_scenes_give_finite_oriented_volumes(params in case_params()) {
+        check_volumes(&params)?;
     }
 }
 
+/// The case that found the PVM extrusion turning back towards the light
+/// (docs/stability.md, fix 2): a tetrahedron 2372 units across, light radius
+/// 1.8 of that, its surface 0.003 of that from the shape's bounding ball.
 #[test]
-fn silhouettes_are_invariant_under_scaling_and_translation() {
-    let mut rng = Rng(0xD1B5_4A32_D192_ED03);
-    for case in 0..CASES / 4 {
-        let (p, f) = shape(rng.next());
-        let rot = rng.rotation();
+fn large_light_close_to_a_caster_extrudes_away_from_it() {
+    let params = CaseParams {
+        kind: 2,
+        scale: 2.371546580552902e3,
+        axis: DVec3::new(0.010379987400876527, -0.8949563409191361, 0.44603296258257497),
+        angle: 2.677302161108944,
+        offset_direction: DVec3::new(0.7871124721198135, -0.6024118685539994, -0.13249111992399554),
+        offset: 9.482015450656998,
+        radius: 1.8037486565149892,
+        gap: 3.0088013685659856e-3,
+        light_direction: DVec3::new(0.022463148125842266, 0.2733885374844814, -0.9616413648280594),
+    };
+    check_volumes(&params).unwrap();
+}
+
+proptest! {
+    #![proptest_config(config(500))]
+
+    #[test]
+    fn silhouettes_are_invariant_under_scaling_and_translation(
+        kind in 0..4u64,
+        axis in direction(),
+        angle in 0.0..std::f64::consts::TAU,
+        light in direction(),
+        distance in 2.0..20.0f64,
+        shift in [-4i32..=4, -4i32..=4, -4i32..=4],
+    ) {
+        let (p, f) = shape(kind);
+        let rot = DMat3::from_axis_angle(axis, angle);
         let p: Vec<DVec3> = p.iter().map(|&v| rot * v).collect();
-        let l = rng.direction() * rng.range(2.0, 20.0);
+        let l = light * distance;
         let base: Vec<(u32, u32)> = silhouette(&Topology::build(&p, &f), l, false).iter().map(|e| (e.ia, e.ib)).collect();
         // Powers of two scale exactly, and a translation by a multiple of a
         // power of two not far above the coordinates keeps the facing tests'
         // signs; the welded indices and orientations must not change.
         for k in [-10, -3, 5, 13] {
             let s = 2f64.powi(k);
-            let t = DVec3::new(rng.range(-4.0, 4.0), rng.range(-4.0, 4.0), rng.range(-4.0, 4.0)).round() * s;
+            let t = DVec3::new(f64::from(shift[0]), f64::from(shift[1]), f64::from(shift[2])) * s;
             let q: Vec<DVec3> = p.iter().map(|&v| v * s + t).collect();
             let moved: Vec<(u32, u32)> = silhouette(&Topology::build(&q, &f), l * s + t, false).iter().map(|e| (e.ia, e.ib)).collect();
-            assert_eq!(base, moved, "case {case}: scale 2^{k}");
+            prop_assert_eq!(&base, &moved, "scale 2^{}", k);
         }
     }
 }
