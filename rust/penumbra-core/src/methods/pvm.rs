@@ -20,13 +20,14 @@ use std::collections::{BTreeMap, HashMap};
 use glam::DVec3;
 use wgpu::util::DeviceExt;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::gpu::{layout, PassTimestamps};
 use crate::light_frustum::LightFrustum;
 use crate::methods::hard::ShadowMapSettings;
 use crate::methods::{ParamReader, ParamValue};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::passes::volumes::VolumePass;
 use crate::scene::PreparedScene;
 use crate::pass_cache::PassKey;
 pub use crate::methods::silhouettes::{silhouette, OpenEdges, SilhouetteCache, SilhouetteEdge};
@@ -198,8 +199,7 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64) 
 }
 
 pub struct PenumbraVolumeMaps {
-    volume_pipeline: wgpu::RenderPipeline,
-    volume_layout: wgpu::BindGroupLayout,
+    volume_pass: VolumePass,
     visibility_pipeline: wgpu::ComputePipeline,
     visibility_layout: wgpu::BindGroupLayout,
 }
@@ -245,31 +245,14 @@ impl PvmFrame {
 
 impl PenumbraVolumeMaps {
     pub fn new(device: &wgpu::Device) -> Self {
-        let volume_layout = layout::bind_group_layout(device, "pvm::volume_layout", &[layout::uniform(0)]);
-        let module = crate::shaders::module(device, "pvm::volume_shader", crate::shaders::pvm_volumes());
-        let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
-        let buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<VolumeVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &attributes,
-        })];
-        let volume_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("pvm::volume_pipeline"),
-            layout: Some(&layout::pipeline_layout(device, "pvm::volume_pipeline_layout", &volume_layout)),
-            vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers: &buffers },
-            // Both sides of every quadrilateral: the first-depth volume, whichever way it faces.
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: layout::nearest_depth(crate::passes::shadow_map::FORMAT),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(EDGE_FORMAT.into()), Some(EDGE_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let volume_pass = VolumePass::new::<VolumeVertex>(
+            device,
+            "pvm::volume_pass",
+            crate::shaders::pvm_volumes(),
+            ("vs_main", "fs_main"),
+            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3],
+            &[EDGE_FORMAT, EDGE_FORMAT],
+        );
         let visibility_layout = layout::bind_group_layout(
             device,
             "pvm::visibility_layout",
@@ -288,8 +271,7 @@ impl PenumbraVolumeMaps {
         );
         let visibility_pipeline = layout::compute_pipeline(device, "pvm::visibility_pipeline", crate::shaders::pvm(), &visibility_layout);
         Self {
-            volume_pipeline,
-            volume_layout,
+            volume_pass,
             visibility_pipeline,
             visibility_layout,
         }
@@ -323,48 +305,10 @@ impl PenumbraVolumeMaps {
             vertices = v;
             stats = s;
         }
-        if vertices.len() > u32::MAX as usize {
-            return Err(Error::InvalidScene("too many penumbra volumes for one draw".into()));
-        }
-        let volume_depth = crate::passes::shadow_map::ShadowMapPass::create_map(device, map);
         let edge_usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let edge0 = layout::create_texture(device, "pvm::edge0_map", (map, map), EDGE_FORMAT, edge_usage);
         let edge1 = layout::create_texture(device, "pvm::edge1_map", (map, map), EDGE_FORMAT, edge_usage);
-        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvm::volume_uniforms"),
-            contents: bytemuck::bytes_of(&crate::passes::shadow_map::shadow_uniforms(frustum)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bind_group = layout::bind_group(device, "pvm::volume_bind_group", &self.volume_layout, &[uniforms.as_entire_binding()]);
-        let (depth_view, e0, e1) = (layout::view(&volume_depth), layout::view(&edge0), layout::view(&edge1));
-        let clear = wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store };
-        let attachment = |view| Some(wgpu::RenderPassColorAttachment { view, depth_slice: None, resolve_target: None, ops: clear });
-        let buffer = (!vertices.is_empty()).then(|| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("pvm::volume_vertices"),
-                contents: bytemuck::cast_slice(&vertices),
-                usage: wgpu::BufferUsages::VERTEX,
-            })
-        });
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("pvm::volume_pass"),
-            color_attachments: &[attachment(&e0), attachment(&e1)],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timestamps.map(|t| t.render()),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        if let Some(buffer) = &buffer {
-            pass.set_pipeline(&self.volume_pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.set_vertex_buffer(0, buffer.slice(..));
-            pass.draw(0..vertices.len() as u32, 0..1);
-        }
-        drop(pass);
+        let volume_depth = self.volume_pass.record(device, encoder, frustum, &vertices, map, &[&edge0, &edge1], timestamps)?;
         Ok((PvmVolumes { volume_depth, edge0, edge1, stats }, cache_hits))
     }
 

@@ -34,7 +34,7 @@ use crate::methods::silhouettes::{OpenEdges, SilhouetteCache, SilhouetteEdge};
 use crate::methods::{ParamReader, ParamValue};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::shading::{ShadingPass, VISIBILITY_FORMAT};
-use crate::passes::shadow_map::ShadowMapPass;
+use crate::passes::volumes::VolumePass;
 use crate::scene::PreparedScene;
 
 /// The d_e channel of the mask.
@@ -231,8 +231,7 @@ struct BlurUniform {
 pub const COUNTERS: [&str; 3] = ["masked_pixels", "filtered_pixels", "blurred_pixels"];
 
 pub struct PenumbraVolumeMaskFiltering {
-    mask_pipeline: wgpu::RenderPipeline,
-    mask_layout: wgpu::BindGroupLayout,
+    mask_pass: VolumePass,
     estimate_pipeline: wgpu::ComputePipeline,
     estimate_layout: wgpu::BindGroupLayout,
     blur_pipeline: wgpu::ComputePipeline,
@@ -321,31 +320,14 @@ pub fn estimate_key(params: &PvmfParams, frustum: &LightFrustum, light: ([f32; 3
 
 impl PenumbraVolumeMaskFiltering {
     pub fn new(device: &wgpu::Device) -> Self {
-        let mask_layout = layout::bind_group_layout(device, "pvmf::mask_layout", &[layout::uniform(0)]);
-        let module = crate::shaders::module(device, "pvmf::mask_shader", crate::shaders::pvmf_mask());
-        let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32];
-        let buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<MaskVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &attributes,
-        })];
-        let mask_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("pvmf::mask_pipeline"),
-            layout: Some(&layout::pipeline_layout(device, "pvmf::mask_pipeline_layout", &mask_layout)),
-            vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_mask"), compilation_options: Default::default(), buffers: &buffers },
-            // Both sides of every quadrilateral: the volume nearest the light, whichever way it faces.
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: layout::nearest_depth(crate::passes::shadow_map::FORMAT),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_mask"),
-                compilation_options: Default::default(),
-                targets: &[Some(DISTANCE_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let mask_pass = VolumePass::new::<MaskVertex>(
+            device,
+            "pvmf::mask_pass",
+            crate::shaders::pvmf_mask(),
+            ("vs_mask", "fs_mask"),
+            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32],
+            &[DISTANCE_FORMAT],
+        );
         let estimate_layout = layout::bind_group_layout(
             device,
             "pvmf::estimate_layout",
@@ -379,8 +361,7 @@ impl PenumbraVolumeMaskFiltering {
         );
         let blur_pipeline = layout::compute_pipeline(device, "pvmf::blur_pipeline", crate::shaders::pvmf_blur(), &blur_layout);
         Self {
-            mask_pipeline,
-            mask_layout,
+            mask_pass,
             estimate_pipeline,
             estimate_layout,
             blur_pipeline,
@@ -411,53 +392,13 @@ impl PenumbraVolumeMaskFiltering {
             let reach = 4.0 * frustum.far as f64 + 4.0 * r;
             (vertices, stats) = mask_volumes(&edges, l, r, params.s_e, params.offsets, reach);
         }
-        if vertices.len() > u32::MAX as usize {
-            return Err(Error::InvalidScene("too many penumbra volumes for one draw".into()));
-        }
-        let mask_depth = ShadowMapPass::create_map(device, map);
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
+        // d_e = 0 (the clear value) marks texels without a volume.
         let edge_distance = layout::create_texture(device, "pvmf::edge_distance", (map, map), DISTANCE_FORMAT, usage);
-        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvmf::mask_uniforms"),
-            // The moved points lie between the light and the edges, nearer than
-            // the scene's near plane: clip only what is (almost) at the light.
-            contents: bytemuck::bytes_of(&crate::passes::shadow_map::shadow_uniforms(&frustum.with_near(frustum.far * 1e-4))),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bind_group = layout::bind_group(device, "pvmf::mask_bind_group", &self.mask_layout, &[uniforms.as_entire_binding()]);
-        let buffer = (!vertices.is_empty()).then(|| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("pvmf::mask_vertices"),
-                contents: bytemuck::cast_slice(&vertices),
-                usage: wgpu::BufferUsages::VERTEX,
-            })
-        });
-        let (depth_view, distance_view) = (layout::view(&mask_depth), layout::view(&edge_distance));
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("pvmf::mask_pass"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &distance_view,
-                depth_slice: None,
-                resolve_target: None,
-                // d_e = 0 marks texels without a volume.
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timestamps.map(|t| t.render()),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        if let Some(buffer) = &buffer {
-            pass.set_pipeline(&self.mask_pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.set_vertex_buffer(0, buffer.slice(..));
-            pass.draw(0..vertices.len() as u32, 0..1);
-        }
-        drop(pass);
+        // The moved points lie between the light and the edges, nearer than
+        // the scene's near plane: clip only what is (almost) at the light.
+        let mask_frustum = frustum.with_near(frustum.far * 1e-4);
+        let mask_depth = self.mask_pass.record(device, encoder, &mask_frustum, &vertices, map, &[&edge_distance], timestamps)?;
         Ok((PvmfMask { mask_depth, edge_distance, stats }, cache_hits))
     }
 

@@ -4,6 +4,7 @@
 pub mod gbuffer;
 pub mod shading;
 pub mod shadow_map;
+pub mod volumes;
 
 /// Vertex layout of [`crate::scene::CornerVertex`]: position, normal, mesh index.
 pub const CORNER_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
