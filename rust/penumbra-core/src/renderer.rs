@@ -263,11 +263,19 @@ impl Renderer {
         let device = &self.ctx.device;
         let size = (camera.width, camera.height);
         let vertex_count = prepared.corners.len() as u32;
-        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("renderer::corners"),
-            contents: bytemuck::cast_slice(&prepared.corners),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
+        // Uploaded only when a pass draws the geometry: not when the pass
+        // cache supplies the G-buffer and the shadow map (a sweep of filter
+        // settings re-uploads nothing).
+        let vertex_buffer = std::cell::OnceCell::new();
+        let vertices = || {
+            vertex_buffer.get_or_init(|| {
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("renderer::corners"),
+                    contents: bytemuck::cast_slice(&prepared.corners),
+                    usage: wgpu::BufferUsages::VERTEX,
+                })
+            })
+        };
         let visibility = ShadingPass::create_visibility(device, size);
         let radiance = crate::gpu::layout::create_texture(
             device,
@@ -301,7 +309,7 @@ impl Renderer {
             None => {
                 let gbuffer = Arc::new(GBuffer::new(device, size));
                 profiler.pass("gbuffer", |encoder, ts| {
-                    self.gbuffer.record(device, encoder, &gbuffer, &vertices, vertex_count, view, projection, ts)
+                    self.gbuffer.record(device, encoder, &gbuffer, vertices(), vertex_count, view, projection, ts)
                 })?;
                 fresh.gbuffer = Some((gbuffer_key.clone(), gbuffer.clone()));
                 gbuffer
@@ -334,7 +342,7 @@ impl Renderer {
                 let shadow_map = Arc::new(ShadowMapPass::create_map(device, if centre_map { settings.map_size } else { 1 }));
                 if centre_map {
                     profiler.pass("shadow_map", |encoder, ts| {
-                        self.shadow_map.record(device, encoder, &shadow_map, frustum, map_depth, &vertices, vertex_count, ts)
+                        self.shadow_map.record(device, encoder, &shadow_map, frustum, map_depth, vertices(), vertex_count, ts)
                     })?;
                     stats.insert("shadow_maps_rendered".into(), 1);
                     fresh.shadow_map = Some((shadow_key.clone(), shadow_map.clone()));
@@ -388,7 +396,7 @@ impl Renderer {
                 let mut used = Ok(0);
                 profiler.pass("light_samples", |encoder, ts| {
                     used = self.reference.record(
-                        device, encoder, &self.shadow_map, params, prepared, (l, light.1 as f64), (&vertices, vertex_count), &gbuffer, &visibility, ts,
+                        device, encoder, &self.shadow_map, params, prepared, (l, light.1 as f64), (vertices(), vertex_count), &gbuffer, &visibility, ts,
                     );
                 })?;
                 let used = used?;
