@@ -17,8 +17,11 @@ struct PcfKernel {
 @group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
-@group(0) @binding(4) var<storage, read> shadow: ShadowTest;
-@group(0) @binding(5) var<storage, read> pcf: PcfKernel;
+@group(0) @binding(4) var<storage, read> shadow_params: ShadowTest;
+@group(0) @binding(5) var<storage, read> pcf_params: PcfKernel;
+// Per-invocation copies of the parameters, read once in `main` (as in pcss.wgsl).
+var<private> shadow: ShadowTest;
+var<private> pcf: PcfKernel;
 @group(0) @binding(6) var visibility_out: texture_storage_2d<r32float, write>;
 
 fn pcf_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> f32 {
@@ -45,6 +48,8 @@ fn pcf_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> f32 {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    shadow = shadow_params;
+    pcf = pcf_params;
     let size = textureDimensions(gbuffer_normal);
     if (id.x >= size.x || id.y >= size.y) {
         return;

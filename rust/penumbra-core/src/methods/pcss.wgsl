@@ -31,8 +31,13 @@ struct PcssPixel {
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
 // center.w: the light's radius.
-@group(0) @binding(4) var<storage, read> shadow: ShadowTest;
-@group(0) @binding(5) var<storage, read> pcss: PcssSampling;
+@group(0) @binding(4) var<storage, read> shadow_params: ShadowTest;
+@group(0) @binding(5) var<storage, read> pcss_params: PcssSampling;
+// Per-invocation copies of the parameters, read once in `main`: storage-buffer
+// loads are not hoisted out of the tap loops on every driver (lavapipe
+// gathers and bounds-checks each one).
+var<private> shadow: ShadowTest;
+var<private> pcss: PcssSampling;
 @group(0) @binding(6) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(7) var width_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var blocker_out: texture_storage_2d<r32float, write>;
@@ -153,6 +158,8 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    shadow = shadow_params;
+    pcss = pcss_params;
     let size = textureDimensions(gbuffer_normal);
     if (id.x >= size.x || id.y >= size.y) {
         return;

@@ -11,7 +11,7 @@
 @group(0) @binding(4) var edge_distance: texture_2d<f32>;
 @group(0) @binding(5) var shadow_sampler: sampler_comparison;
 // center.w: the light's radius r.
-@group(0) @binding(6) var<storage, read> pvmf: ShadowTest;
+@group(0) @binding(6) var<storage, read> pvmf_params: ShadowTest;
 
 struct PvmfSettings {
     s_p: f32,
@@ -21,7 +21,10 @@ struct PvmfSettings {
     // fail the shadow-map test outside every volume (else filter them, 5.2).
     flags: u32,
 };
-@group(0) @binding(7) var<storage, read> settings: PvmfSettings;
+@group(0) @binding(7) var<storage, read> settings_params: PvmfSettings;
+// Per-invocation copies of the parameters, read once in `main` (as in pcss.wgsl).
+var<private> pvmf: ShadowTest;
+var<private> settings: PvmfSettings;
 @group(0) @binding(8) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var blur_mask_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(10) var filter_width_out: texture_storage_2d<r32float, write>;
@@ -80,6 +83,8 @@ fn filter_width(r: Receiver, p: vec3<f32>, d_o: f32) -> vec2<f32> {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    pvmf = pvmf_params;
+    settings = settings_params;
     let size = textureDimensions(gbuffer_normal);
     if (id.x >= size.x || id.y >= size.y) {
         return;

@@ -17,12 +17,15 @@ struct BlurSettings {
     // 1 on the pass that counts blurred pixels.
     count: u32,
 };
-@group(0) @binding(3) var<storage, read> blur: BlurSettings;
+@group(0) @binding(3) var<storage, read> blur_params: BlurSettings;
+// Per-invocation copies of the parameters, read once in `main` (as in pcss.wgsl).
+var<private> blur: BlurSettings;
 @group(0) @binding(4) var destination: texture_storage_2d<r32float, write>;
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 3>;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    blur = blur_params;
     let size = vec2<i32>(textureDimensions(gbuffer_normal));
     let u = vec2<i32>(id.xy);
     if (u.x >= size.x || u.y >= size.y) {
