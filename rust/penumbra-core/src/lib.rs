@@ -11,6 +11,7 @@ pub mod passes;
 pub mod renderer;
 pub mod scene;
 pub mod shaders;
+pub mod silhouettes;
 pub mod topology;
 
 pub use error::{Error, Result};

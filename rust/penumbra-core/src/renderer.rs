@@ -18,7 +18,7 @@ use crate::methods::pcss::PercentageCloserSoftShadows;
 use crate::methods::pvm::{PenumbraVolumeMaps, PvmFrame, PvmVolumes};
 use crate::methods::pvmf::{PenumbraVolumeMaskFiltering, PvmfEstimate, PvmfMask};
 use crate::methods::reference::ReferenceShadows;
-use crate::methods::silhouettes::SilhouetteCache;
+use crate::silhouettes::SilhouetteCache;
 use crate::methods::{MethodConfig, ParamValue};
 use crate::pass_cache::{PassCache, PassKey, PassKind};
 use crate::passes::gbuffer::{GBuffer, GBufferPass};

@@ -25,39 +25,39 @@ pub fn shading() -> String {
 }
 
 pub fn hard() -> String {
-    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/hard.wgsl")])
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/hard/visibility.wgsl")])
 }
 
 pub fn pcf() -> String {
-    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF, include_str!("methods/pcf.wgsl")])
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF, include_str!("methods/pcf/visibility.wgsl")])
 }
 
 pub fn pcss() -> String {
-    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF, include_str!("methods/pcss.wgsl")])
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF, include_str!("methods/pcss/visibility.wgsl")])
 }
 
 pub fn reference() -> String {
-    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/reference.wgsl")])
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/reference/visibility.wgsl")])
 }
 
 pub fn pvm_volumes() -> String {
-    compose(&[include_str!("methods/pvm_volumes.wgsl")])
+    compose(&[include_str!("methods/pvm/volumes.wgsl")])
 }
 
 pub fn pvm() -> String {
-    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/pvm.wgsl")])
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/pvm/visibility.wgsl")])
 }
 
 pub fn pvmf_mask() -> String {
-    compose(&[include_str!("passes/shadow_map.wgsl"), include_str!("methods/pvmf_mask.wgsl")])
+    compose(&[include_str!("passes/shadow_map.wgsl"), include_str!("methods/pvmf/mask.wgsl")])
 }
 
 pub fn pvmf() -> String {
-    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF, include_str!("methods/pvmf.wgsl")])
+    compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, PCF, include_str!("methods/pvmf/estimate.wgsl")])
 }
 
 pub fn pvmf_blur() -> String {
-    compose(&[include_str!("methods/pvmf_blur.wgsl")])
+    compose(&[include_str!("methods/pvmf/blur.wgsl")])
 }
 
 /// Every composed shader with the files it is made of (relative to `src/`).
@@ -69,12 +69,12 @@ pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
         (
             "hard",
             hard(),
-            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/hard.wgsl"],
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/hard/visibility.wgsl"],
         ),
         (
             "reference",
             reference(),
-            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/reference.wgsl"],
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/reference/visibility.wgsl"],
         ),
         (
             "pcf_taps",
@@ -84,20 +84,20 @@ pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
         (
             "pcf",
             pcf(),
-            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "shaders/pcf.wgsl", "methods/pcf.wgsl"],
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "shaders/pcf.wgsl", "methods/pcf/visibility.wgsl"],
         ),
         (
             "pcss",
             pcss(),
-            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "shaders/pcf.wgsl", "methods/pcss.wgsl"],
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "shaders/pcf.wgsl", "methods/pcss/visibility.wgsl"],
         ),
-        ("pvm_volumes", pvm_volumes(), &["methods/pvm_volumes.wgsl"]),
+        ("pvm_volumes", pvm_volumes(), &["methods/pvm/volumes.wgsl"]),
         (
             "pvm",
             pvm(),
-            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/pvm.wgsl"],
+            &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "methods/pvm/visibility.wgsl"],
         ),
-        ("pvmf_mask", pvmf_mask(), &["passes/shadow_map.wgsl", "methods/pvmf_mask.wgsl"]),
+        ("pvmf_mask", pvmf_mask(), &["passes/shadow_map.wgsl", "methods/pvmf/mask.wgsl"]),
         (
             "pvmf",
             pvmf(),
@@ -106,10 +106,10 @@ pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
                 "shaders/light_space.wgsl",
                 "shaders/shadow_test.wgsl",
                 "shaders/pcf.wgsl",
-                "methods/pvmf.wgsl",
+                "methods/pvmf/estimate.wgsl",
             ],
         ),
-        ("pvmf_blur", pvmf_blur(), &["methods/pvmf_blur.wgsl"]),
+        ("pvmf_blur", pvmf_blur(), &["methods/pvmf/blur.wgsl"]),
     ]
 }
 

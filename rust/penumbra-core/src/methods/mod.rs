@@ -11,7 +11,7 @@ pub mod pcss;
 pub mod pvm;
 pub mod pvmf;
 pub mod reference;
-pub mod silhouettes;
+
 
 pub use hard::{BiasMode, HardParams, ShadowMapSettings};
 pub use pcf::PcfParams;

@@ -22,7 +22,7 @@ struct PvmfSettings {
     flags: u32,
 };
 @group(0) @binding(7) var<storage, read> settings_params: PvmfSettings;
-// Per-invocation copies of the parameters, read once in `main` (as in pcss.wgsl).
+// Per-invocation copies of the parameters, read once in `main` (as in pcss/visibility.wgsl).
 var<private> pvmf: ShadowTest;
 var<private> settings: PvmfSettings;
 @group(0) @binding(8) var visibility_out: texture_storage_2d<r32float, write>;

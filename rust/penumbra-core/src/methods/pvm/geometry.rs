@@ -1,63 +1,15 @@
-//! Method `pvm`: penumbra volume maps (Cournia chapter 4).
-//!
-//! Pass 1 is the shadow map of `hard`. Pass 2 builds, on the CPU, the
-//! penumbra volumes of every silhouette edge (4.1.1, 4.1.2) and renders their
-//! quadrilaterals from the light into the penumbra volume map (4.1.3). Pass 3
-//! estimates visibility per camera pixel (4.2, listing 4.2).
-//!
-//! Silhouettes are found with respect to the light centre. Each silhouette
-//! edge is oriented so that its hard-shadow plane normal points away from the
-//! occluder; consecutive edges then form loops. The paper's structure assumes
-//! two silhouette edges per silhouette vertex; at a vertex with any other
-//! number (possible on non-convex meshes, and at the ends of open boundaries)
-//! the edges meeting there are not paired, and each is extruded along its own
-//! plane, as the paper's coincident-plane rule does. The volumes then meet
-//! in a sliver rather than a shared extrusion vector: never NaN, at most a
-//! thin gap where the shadow-map test takes over. `stats` counts such vertices.
+//! The geometry of PVM's penumbra volumes (Cournia 4.1.2): per silhouette
+//! edge, the outer and inner penumbra planes through the edge and the two
+//! displaced light positions, and the extrusion vectors shared by
+//! consecutive edges of a silhouette loop. CPU side; the method's passes
+//! render what this builds.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 
 use glam::DVec3;
-use wgpu::util::DeviceExt;
 
-use crate::error::Result;
-use crate::gpu::{layout, PassTimestamps};
-use crate::light_frustum::LightFrustum;
-use crate::methods::hard::ShadowMapSettings;
-use crate::methods::{ParamReader, ParamValue};
-use crate::passes::gbuffer::GBuffer;
-use crate::passes::shading::VISIBILITY_FORMAT;
-use crate::passes::volumes::VolumePass;
-use crate::scene::PreparedScene;
-use crate::pass_cache::PassKey;
-pub use crate::methods::silhouettes::{silhouette, OpenEdges, SilhouetteCache, SilhouetteEdge};
+use crate::silhouettes::SilhouetteEdge;
 
-pub const EDGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-
-#[derive(Debug, Clone, PartialEq)]
-pub struct PvmParams {
-    pub shadow: ShadowMapSettings,
-    /// The 3k^2 - 2k^3 interpolant of 4.2.
-    pub falloff: bool,
-    pub open_edges: OpenEdges,
-}
-
-impl PvmParams {
-    pub fn read(r: &mut ParamReader<'_>) -> Result<Self> {
-        Ok(Self {
-            shadow: ShadowMapSettings::read(r)?,
-            falloff: r.bool("falloff", true)?,
-            open_edges: OpenEdges::parse(r.choice("open_edges", "error", &OpenEdges::NAMES)?),
-        })
-    }
-
-    pub fn effective(&self) -> BTreeMap<String, ParamValue> {
-        let mut out = self.shadow.effective();
-        out.insert("falloff".into(), ParamValue::Bool(self.falloff));
-        out.insert("open_edges".into(), ParamValue::Str(self.open_edges.name().into()));
-        out
-    }
-}
 
 /// One corner of a volume quadrilateral with the silhouette edge it comes from.
 #[repr(C)]
@@ -198,163 +150,10 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64) 
     (vertices, stats)
 }
 
-pub struct PenumbraVolumeMaps {
-    volume_pass: VolumePass,
-    visibility_pipeline: wgpu::ComputePipeline,
-    visibility_layout: wgpu::BindGroupLayout,
-}
-
-/// The penumbra volume map (pass 2): what the renderer's pass cache keeps.
-pub struct PvmVolumes {
-    pub volume_depth: wgpu::Texture,
-    pub edge0: wgpu::Texture,
-    pub edge1: wgpu::Texture,
-    pub stats: VolumeStats,
-}
-
-/// What one PVM render produced besides visibility: the volume map (built
-/// now or reused) and this frame's membership image and counter.
-pub struct PvmFrame {
-    pub volumes: std::sync::Arc<PvmVolumes>,
-    pub membership: wgpu::Texture,
-    pub counter: wgpu::Buffer,
-}
-
-/// What pass 2 reads besides the geometry: the light, the frustum, the map
-/// size and `open_edges` (appended to the pass-cache key).
-pub fn volumes_key(params: &PvmParams, frustum: &LightFrustum, (l, r): (DVec3, f64), key: &mut PassKey) {
-    key.f64s(&l.to_array())
-        .f64s(&[r])
-        .bytes(params.open_edges.name().as_bytes())
-        .frustum(frustum)
-        .u32(params.shadow.map_size);
-}
-
-impl PvmFrame {
-    pub fn new(device: &wgpu::Device, volumes: std::sync::Arc<PvmVolumes>, size: (u32, u32)) -> Self {
-        let membership = crate::passes::shading::ShadingPass::create_visibility(device, size);
-        let counter = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvm::pixels_in_volume"),
-            contents: &[0u8; 4],
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
-        Self { volumes, membership, counter }
-    }
-}
-
-
-impl PenumbraVolumeMaps {
-    pub fn new(device: &wgpu::Device) -> Self {
-        let volume_pass = VolumePass::new::<VolumeVertex>(
-            device,
-            "pvm::volume_pass",
-            crate::shaders::pvm_volumes(),
-            ("vs_main", "fs_main"),
-            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3],
-            &[EDGE_FORMAT, EDGE_FORMAT],
-        );
-        let visibility_layout = layout::bind_group_layout(
-            device,
-            "pvm::visibility_layout",
-            &[
-                layout::float_texture(0),
-                layout::float_texture(1),
-                layout::depth_texture(2),
-                layout::depth_texture(3),
-                layout::float_texture(4),
-                layout::float_texture(5),
-                layout::parameters(6),
-                layout::storage_texture(7, VISIBILITY_FORMAT),
-                layout::storage_texture(8, VISIBILITY_FORMAT),
-                layout::storage_buffer_rw(9),
-            ],
-        );
-        let visibility_pipeline = layout::compute_pipeline(device, "pvm::visibility_pipeline", crate::shaders::pvm(), &visibility_layout);
-        Self {
-            volume_pass,
-            visibility_pipeline,
-            visibility_layout,
-        }
-    }
-
-    /// Pass 2: builds and renders the penumbra volume map; also returns the
-    /// silhouette cache hits. It reads the geometry, the frustum, the light,
-    /// `map_size` and `open_edges` (the renderer's pass-cache key).
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_volumes(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        params: &PvmParams,
-        silhouettes: &SilhouetteCache,
-        scene: &PreparedScene,
-        frustum: &LightFrustum,
-        light: (DVec3, f64),
-        timestamps: Option<PassTimestamps<'_>>,
-    ) -> Result<(PvmVolumes, usize)> {
-        let (l, r) = light;
-        let map = params.shadow.map_size;
-        let (mut stats, mut cache_hits, vertices) = (VolumeStats::default(), 0, Vec::new());
-        let mut vertices = vertices;
-        // A point light has no penumbra: skip the volumes entirely.
-        if r > 0.0 {
-            let (edges, hits) = silhouettes.edges(scene, l, params.open_edges)?;
-            cache_hits = hits;
-            let reach = 4.0 * frustum.far as f64 + 4.0 * r;
-            let (v, s) = penumbra_volumes(&edges, l, r, reach);
-            vertices = v;
-            stats = s;
-        }
-        let edge_usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
-        let edge0 = layout::create_texture(device, "pvm::edge0_map", (map, map), EDGE_FORMAT, edge_usage);
-        let edge1 = layout::create_texture(device, "pvm::edge1_map", (map, map), EDGE_FORMAT, edge_usage);
-        let volume_depth = self.volume_pass.record(device, encoder, frustum, &vertices, map, &[&edge0, &edge1], timestamps)?;
-        Ok((PvmVolumes { volume_depth, edge0, edge1, stats }, cache_hits))
-    }
-
-    /// Pass 3: visibility per camera pixel.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_visibility(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        params: &PvmParams,
-        frame: &PvmFrame,
-        gbuffer: &GBuffer,
-        shadow_map: &wgpu::Texture,
-        frustum: &LightFrustum,
-        light: ([f32; 3], f32),
-        visibility: &wgpu::Texture,
-        timestamps: Option<PassTimestamps<'_>>,
-    ) {
-        let flags = u32::from(params.falloff);
-        let uniforms = layout::parameter_buffer(device, "pvm::visibility_uniforms", &params.shadow.uniform(frustum, light.0, light.1, flags));
-        let v = &frame.volumes;
-        let views = [shadow_map, &v.volume_depth, &v.edge0, &v.edge1, visibility, &frame.membership].map(layout::view);
-        let bind_group = layout::bind_group(
-            device,
-            "pvm::visibility_bind_group",
-            &self.visibility_layout,
-            &[
-                wgpu::BindingResource::TextureView(&gbuffer.position_view),
-                wgpu::BindingResource::TextureView(&gbuffer.normal_view),
-                wgpu::BindingResource::TextureView(&views[0]),
-                wgpu::BindingResource::TextureView(&views[1]),
-                wgpu::BindingResource::TextureView(&views[2]),
-                wgpu::BindingResource::TextureView(&views[3]),
-                uniforms.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&views[4]),
-                wgpu::BindingResource::TextureView(&views[5]),
-                frame.counter.as_entire_binding(),
-            ],
-        );
-        layout::dispatch_per_pixel(encoder, "pvm::visibility_pass", &self.visibility_pipeline, &bind_group, gbuffer.size, timestamps);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::silhouettes::silhouette;
 
     /// A unit cube centred at (0, 2, 0), outward faces.
     fn cube() -> Topology {

@@ -235,7 +235,7 @@ pub fn visible_cap_cos(distance: f64, bound: f64) -> f64 {
     (std::f64::consts::FRAC_PI_2 + spread).min(std::f64::consts::PI).cos()
 }
 
-/// Uniform layout of `SampleWeight` in `methods/reference.wgsl`.
+/// Uniform layout of `SampleWeight` in `methods/reference/visibility.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct SampleWeightUniform {

@@ -102,7 +102,7 @@ impl PcfParams {
     }
 }
 
-/// Uniform layout of `PcfKernel` in `methods/pcf.wgsl`.
+/// Uniform layout of `PcfKernel` in `methods/pcf/visibility.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct PcfUniform {

@@ -18,7 +18,7 @@ struct BlurSettings {
     count: u32,
 };
 @group(0) @binding(3) var<storage, read> blur_params: BlurSettings;
-// Per-invocation copies of the parameters, read once in `main` (as in pcss.wgsl).
+// Per-invocation copies of the parameters, read once in `main` (as in pcss/visibility.wgsl).
 var<private> blur: BlurSettings;
 @group(0) @binding(4) var destination: texture_storage_2d<r32float, write>;
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 3>;

@@ -19,7 +19,7 @@ struct PcfKernel {
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
 @group(0) @binding(4) var<storage, read> shadow_params: ShadowTest;
 @group(0) @binding(5) var<storage, read> pcf_params: PcfKernel;
-// Per-invocation copies of the parameters, read once in `main` (as in pcss.wgsl).
+// Per-invocation copies of the parameters, read once in `main` (as in pcss/visibility.wgsl).
 var<private> shadow: ShadowTest;
 var<private> pcf: PcfKernel;
 @group(0) @binding(6) var visibility_out: texture_storage_2d<r32float, write>;

@@ -27,7 +27,7 @@ use crate::methods::{ParamReader, ParamValue};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::shading::{ShadingPass, VISIBILITY_FORMAT};
 
-/// Points in the Poisson-disk set of `methods/pcss.wgsl`.
+/// Points in the Poisson-disk set of `methods/pcss/visibility.wgsl`.
 pub const POISSON_POINTS: u32 = 64;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -96,7 +96,7 @@ impl PcssParams {
     }
 }
 
-/// Uniform layout of `PcssSampling` in `methods/pcss.wgsl`.
+/// Uniform layout of `PcssSampling` in `methods/pcss/visibility.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct PcssUniform {
@@ -208,7 +208,7 @@ mod tests {
 
     /// The Poisson-disk set as the shader holds it.
     fn poisson_disk() -> Vec<[f32; 2]> {
-        let src = include_str!("pcss.wgsl");
+        let src = include_str!("visibility.wgsl");
         let start = src.find("var<private> poisson_disk").expect("the set is in the shader");
         let body = &src[start..src[start..].find(");").unwrap() + start];
         body.split("vec2<f32>(")
