@@ -271,7 +271,7 @@ fn adapter_info(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 /// Every method name of SPEC section 4 with whether it is implemented.
 #[pyfunction]
 fn methods(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
-    PyList::new(py, core::METHODS.iter().map(|(name, done)| (*name, *done)))
+    PyList::new(py, core::methods())
 }
 
 /// Writes a linear float32 image, (H, W) or (H, W, 3): `.png` as sRGB 8-bit, `.exr` linear.

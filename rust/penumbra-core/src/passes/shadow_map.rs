@@ -4,10 +4,17 @@
 //! Cournia 5.5) or the mid-point of the two (Woo 1992, which Cournia 5.5
 //! names as future work): both maps, then a full-screen pass averaging them.
 
-use wgpu::util::DeviceExt;
-
+use crate::error::Result;
+use crate::frame::{Frame, FrameContext, Intermediate};
+use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool};
 use crate::gpu::{layout, PassTimestamps};
 use crate::light_frustum::LightFrustum;
+use crate::pass_cache::{CachedPass, PassKey};
+use crate::passes::shadow_test::ShadowMapSettings;
+
+/// The shadow map from the light centre, as the pass cache keeps it (pass 1
+/// of every method but `reference`; see [`centre_map`]).
+pub const CENTRE_MAP: CachedPass = CachedPass { name: "shadow_map", capacity: 3 };
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -33,14 +40,14 @@ pub struct ShadowUniforms {
 pub struct ShadowMapPass {
     first_depth: wgpu::RenderPipeline,
     second_depth: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    layout: Layout,
     midpoint: wgpu::RenderPipeline,
-    midpoint_layout: wgpu::BindGroupLayout,
+    midpoint_layout: Layout,
 }
 
 impl ShadowMapPass {
-    pub fn new(device: &wgpu::Device) -> Self {
-        let layout = layout::bind_group_layout(device, "shadow_map::layout", &[layout::uniform(0)]);
+    pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
+        let layout = pool.layout(device, "shadow_map::layout", &[layout::uniform(0)]);
         let module = crate::shaders::module(device, "shadow_map::shader", crate::shaders::shadow_map());
         let pipeline_layout = layout::pipeline_layout(device, "shadow_map::pipeline_layout", &layout);
         let position_only = [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }];
@@ -68,7 +75,7 @@ impl ShadowMapPass {
                 cache: None,
             })
         };
-        let midpoint_layout = layout::bind_group_layout(
+        let midpoint_layout = pool.layout(
             device,
             "shadow_map::midpoint_layout",
             &[layout::depth_texture(0), layout::depth_texture(1)],
@@ -109,31 +116,27 @@ impl ShadowMapPass {
         }
     }
 
-    pub fn create_map(device: &wgpu::Device, map_size: u32) -> wgpu::Texture {
-        layout::create_texture(
-            device,
+    /// A `map_size` depth map from the frame's pool.
+    pub fn create_map(ctx: &FrameContext<'_>, map_size: u32) -> PooledTexture {
+        ctx.texture(
             "shadow_map::depth",
             (map_size, map_size),
             FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
         )
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// Renders the scene's depth from `frustum`'s apex into `map`.
     pub fn record(
         &self,
-        device: &wgpu::Device,
+        ctx: &FrameContext<'_>,
         encoder: &mut wgpu::CommandEncoder,
-        map: &wgpu::Texture,
+        map: &PooledTexture,
         frustum: &LightFrustum,
         depth: MapDepth,
-        vertices: &wgpu::Buffer,
-        vertex_count: u32,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
-        self.record_part(device, encoder, map, frustum, depth, (vertices, vertex_count), timestamps, (true, true));
+        self.record_part(ctx, encoder, map, frustum, depth, timestamps, (true, true));
     }
 
     /// [`Self::record`] as part of a named pass made of several wgpu passes:
@@ -141,24 +144,19 @@ impl ShadowMapPass {
     #[allow(clippy::too_many_arguments)]
     pub fn record_part(
         &self,
-        device: &wgpu::Device,
+        ctx: &FrameContext<'_>,
         encoder: &mut wgpu::CommandEncoder,
-        map: &wgpu::Texture,
+        map: &PooledTexture,
         frustum: &LightFrustum,
         depth: MapDepth,
-        vertices: (&wgpu::Buffer, u32),
         timestamps: Option<PassTimestamps<'_>>,
         (first, last): (bool, bool),
     ) {
-        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("shadow_map::uniforms"),
-            contents: bytemuck::bytes_of(&shadow_uniforms(frustum)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bind_group = layout::bind_group(device, "shadow_map::bind_group", &self.layout, &[uniforms.as_entire_binding()]);
-        let draw = |encoder: &mut wgpu::CommandEncoder, target: &wgpu::Texture, pipeline, writes| {
-            let view = layout::view(target);
-            let mut pass = begin_depth_pass(encoder, &view, writes);
+        let uniforms = uniform_buffer(ctx, "shadow_map::uniforms", &shadow_uniforms(frustum));
+        let bind_group = ctx.pool.bind_group(ctx.device, "shadow_map::bind_group", &self.layout, &[Binding::Buffer(&uniforms)]);
+        let vertices = ctx.vertices();
+        let draw = |encoder: &mut wgpu::CommandEncoder, target: &PooledTexture, pipeline, writes| {
+            let mut pass = begin_depth_pass(encoder, &target.view, writes);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             pass.set_vertex_buffer(0, vertices.0.slice(..));
@@ -169,22 +167,17 @@ impl ShadowMapPass {
             MapDepth::First => draw(encoder, map, &self.first_depth, part(first, last)),
             MapDepth::Second => draw(encoder, map, &self.second_depth, part(first, last)),
             MapDepth::Midpoint => {
-                let size = (map.width(), map.height());
-                let near = Self::create_map(device, size.0);
-                let far = Self::create_map(device, size.0);
+                let near = Self::create_map(ctx, map.width());
+                let far = Self::create_map(ctx, map.width());
                 draw(encoder, &near, &self.first_depth, part(first, false));
                 draw(encoder, &far, &self.second_depth, None);
-                let bind_group = layout::bind_group(
-                    device,
+                let bind_group = ctx.pool.bind_group(
+                    ctx.device,
                     "shadow_map::midpoint_bind_group",
                     &self.midpoint_layout,
-                    &[
-                        wgpu::BindingResource::TextureView(&layout::view(&near)),
-                        wgpu::BindingResource::TextureView(&layout::view(&far)),
-                    ],
+                    &[Binding::Texture(&near), Binding::Texture(&far)],
                 );
-                let view = layout::view(map);
-                let mut pass = begin_depth_pass(encoder, &view, part(false, last));
+                let mut pass = begin_depth_pass(encoder, &map.view, part(false, last));
                 pass.set_pipeline(&self.midpoint);
                 pass.set_bind_group(0, &bind_group, &[]);
                 pass.draw(0..3, 0..1);
@@ -210,6 +203,50 @@ fn begin_depth_pass<'e>(
         occlusion_query_set: None,
         multiview_mask: None,
     })
+}
+
+/// A pooled uniform buffer holding `value` (for raster passes, whose
+/// shaders do not branch on it: see `layout::parameters`).
+pub fn uniform_buffer<T: bytemuck::Pod>(ctx: &FrameContext<'_>, label: &str, value: &T) -> crate::gpu::pool::PooledBuffer {
+    let bytes = bytemuck::bytes_of(value);
+    let buffer = ctx.buffer(label, bytes.len() as u64, wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST);
+    ctx.queue.write_buffer(&buffer, 0, bytes);
+    buffer
+}
+
+/// Pass 1 of every method but `reference`: the shadow map from the light
+/// centre over the frame's frustum, storing the surface `settings.bias`
+/// asks for; reused from the pass cache when the geometry, the frustum, the
+/// map size and the stored surface are unchanged. Sets the stats
+/// `shadow_maps_rendered` and `map_size` and the intermediate `shadow_map`.
+pub fn centre_map(frame: &mut Frame<'_>, settings: &ShadowMapSettings) -> Result<PooledTexture> {
+    settings.check_limits(frame.ctx.max_texture_side())?;
+    let map_depth = settings.bias.map_depth();
+    let key = centre_map_key(&frame.ctx, settings);
+    let mut rendered = 0;
+    let map = frame.cached(CENTRE_MAP.name, key, |frame| {
+        let map = ShadowMapPass::create_map(&frame.ctx, settings.map_size);
+        frame.pass(CENTRE_MAP.name, |ctx, encoder, ts| {
+            ctx.shared.shadow_map.record(ctx, encoder, &map, ctx.frustum, map_depth, ts)
+        })?;
+        rendered = 1;
+        Ok(map)
+    })?;
+    frame.stat("shadow_maps_rendered", rendered);
+    frame.stat("map_size", settings.map_size as i64);
+    frame.intermediate(Intermediate::depth("shadow_map", &map.resource.texture));
+    Ok(map)
+}
+
+/// The centre map's pass-cache key: it reads the geometry, the frustum, the
+/// map's size and which surface it keeps.
+pub fn centre_map_key(ctx: &FrameContext<'_>, settings: &ShadowMapSettings) -> PassKey {
+    PassKey::new(CENTRE_MAP.name)
+        .bytes(&ctx.geometry)
+        .frustum(ctx.frustum)
+        .u32(settings.map_size)
+        .bytes(format!("{:?}", settings.bias.map_depth()).as_bytes())
+        .finish()
 }
 
 /// The light's view for passes that rasterise from it (shadow maps, volumes).

@@ -5,9 +5,9 @@
 // them. Only texels in the blur mask are blurred; the others are copied and
 // take no taps.
 
-@group(0) @binding(0) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(1) var source: texture_2d<f32>;
-@group(0) @binding(2) var blur_mask: texture_2d<f32>;
+@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
+@group(0) @binding(2) var source: texture_2d<f32>;
+@group(0) @binding(3) var blur_mask: texture_2d<f32>;
 
 struct BlurSettings {
     // One texel along the blur's direction.
@@ -17,11 +17,11 @@ struct BlurSettings {
     // 1 on the pass that counts blurred pixels.
     count: u32,
 };
-@group(0) @binding(3) var<storage, read> blur_params: BlurSettings;
+@group(0) @binding(4) var<storage, read> blur_params: BlurSettings;
 // Per-invocation copies of the parameters, read once in `main` (as in pcss/visibility.wgsl).
 var<private> blur: BlurSettings;
-@group(0) @binding(4) var destination: texture_storage_2d<r32float, write>;
-@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 3>;
+@group(0) @binding(5) var destination: texture_storage_2d<r32float, write>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 3>;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
