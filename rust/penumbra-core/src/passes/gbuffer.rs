@@ -16,9 +16,9 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CameraUniforms {
-    view_proj: [[f32; 4]; 4],
-    view: [[f32; 4]; 4],
+pub struct CameraUniforms {
+    pub(crate) view_proj: [[f32; 4]; 4],
+    pub(crate) view: [[f32; 4]; 4],
 }
 
 pub struct GBufferPass {
@@ -51,7 +51,7 @@ impl GBuffer {
 impl GBufferPass {
     pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         let layout = pool.layout(device, "gbuffer::layout", &[layout::uniform(0)]);
-        let module = crate::shaders::module(device, "gbuffer::shader", crate::shaders::gbuffer());
+        let module = crate::shaders::module(device, "gbuffer::shader", crate::shaders::compose("passes/gbuffer.wgsl"));
         let buffers = [Some(super::corner_layout(&super::CORNER_ATTRIBUTES))];
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("gbuffer::pipeline"),

@@ -11,11 +11,11 @@ pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Floa
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ShadingUniforms {
-    light: [f32; 4],
-    intensity: [f32; 4],
-    ambient: [f32; 4],
-    eye: [f32; 4],
+pub struct ShadingUniforms {
+    pub(crate) light: [f32; 4],
+    pub(crate) intensity: [f32; 4],
+    pub(crate) ambient: [f32; 4],
+    pub(crate) eye: [f32; 4],
 }
 
 pub struct ShadingPass {
@@ -28,7 +28,7 @@ impl ShadingPass {
             device,
             pool,
             "shading::pass",
-            crate::shaders::shading(),
+            crate::shaders::compose("passes/shading.wgsl"),
             &[layout::float_texture, layout::storage_buffer, layout::parameters, |b| layout::storage_texture(b, RADIANCE_FORMAT)],
             &["main"],
         );

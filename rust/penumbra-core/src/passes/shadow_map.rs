@@ -32,9 +32,9 @@ pub enum MapDepth {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadowUniforms {
-    view_proj: [[f32; 4]; 4],
-    view: [[f32; 4]; 4],
-    depth: [f32; 4],
+    pub(crate) view_proj: [[f32; 4]; 4],
+    pub(crate) view: [[f32; 4]; 4],
+    pub(crate) depth: [f32; 4],
 }
 
 pub struct ShadowMapPass {
@@ -48,7 +48,7 @@ pub struct ShadowMapPass {
 impl ShadowMapPass {
     pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         let layout = pool.layout(device, "shadow_map::layout", &[layout::uniform(0)]);
-        let module = crate::shaders::module(device, "shadow_map::shader", crate::shaders::shadow_map());
+        let module = crate::shaders::module(device, "shadow_map::shader", crate::shaders::compose("passes/shadow_map.wgsl"));
         let pipeline_layout = layout::pipeline_layout(device, "shadow_map::pipeline_layout", &layout);
         let position_only = [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }];
         let pipeline = |label: &str, cull_mode: Option<wgpu::Face>| {

@@ -41,7 +41,7 @@ impl Method for HardShadow {
             device,
             pool,
             "hard::visibility_pass",
-            crate::shaders::hard(),
+            crate::shaders::compose("methods/hard/visibility.wgsl"),
             &[layout::depth_texture, layout::parameters, |b| layout::storage_texture(b, VISIBILITY_FORMAT)],
             &["main"],
         );

@@ -4,7 +4,7 @@
 //! Visibility is the fraction of shadow-map tests that pass over a square of
 //! `kernel` texels centred on the receiver's map coordinates, estimated with
 //! an n x n jittered grid (`samples` = n; the jitter is fixed by `seed` and
-//! the pixel). Each tap is `pcf_tap` of `shaders/pcf.wgsl`: the comparison
+//! the pixel). Each tap is `pcf_tap` of `passes/pcf_taps.wgsl`: the comparison
 //! against the receiver's tangent plane along the tap's ray, through a
 //! comparison sampler (`filter`: `bilinear` is the hardware's 2x2 PCF,
 //! `nearest` one texel). A zero-width nearest kernel is the single test of
@@ -37,10 +37,10 @@ pub struct PcfParams {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct PcfUniform {
-    kernel: f32,
-    samples: u32,
-    seed: u32,
-    nearest: u32,
+    pub(crate) kernel: f32,
+    pub(crate) samples: u32,
+    pub(crate) seed: u32,
+    pub(crate) nearest: u32,
 }
 
 pub struct PercentageCloserFiltering {
@@ -82,7 +82,7 @@ impl Method for PercentageCloserFiltering {
             device,
             pool,
             "pcf::visibility_pass",
-            crate::shaders::pcf(),
+            crate::shaders::compose("methods/pcf/visibility.wgsl"),
             &[
                 layout::depth_texture,
                 layout::comparison_sampler,

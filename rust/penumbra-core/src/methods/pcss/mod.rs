@@ -7,7 +7,7 @@
 //! near plane), averaging the raw depths nearer than the receiver's plane;
 //! no blocker means fully lit (the paper's early exit); otherwise the
 //! penumbra width `w_p = (d_r - d_b) w_light / d_b` sets the diameter of a
-//! percentage-closer filter (`shaders/pcf.wgsl` taps). Taps are disk
+//! percentage-closer filter (`passes/pcf_taps.wgsl` taps). Taps are disk
 //! samples, since the light seen from a receiver is a disk: `sampling` =
 //! `grid` is a jittered n x n grid through Shirley and Chiu's concentric map,
 //! `poisson` the first n x n points of a fixed 64-point Poisson-disk set
@@ -55,10 +55,10 @@ pub struct PcssParams {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct PcssUniform {
-    blocker_samples: u32,
-    filter_samples: u32,
-    seed: u32,
-    poisson: u32,
+    pub(crate) blocker_samples: u32,
+    pub(crate) filter_samples: u32,
+    pub(crate) seed: u32,
+    pub(crate) poisson: u32,
 }
 
 /// Names of the pass's counters, in order: pixels that ran the blocker
@@ -117,7 +117,7 @@ impl Method for PercentageCloserSoftShadows {
             device,
             pool,
             "pcss::visibility_pass",
-            crate::shaders::pcss(),
+            crate::shaders::compose("methods/pcss/visibility.wgsl"),
             &[
                 layout::depth_texture,
                 layout::comparison_sampler,

@@ -1,10 +1,13 @@
+#import shaders/receiver.wgsl
+#import passes/pcf_taps.wgsl
+
 // Method `pcss`: percentage-closer soft shadows (Fernando 2005; surveyed in
 // Cournia ch. 3, and the basis of PVMF's filter, 5.2). Per pixel:
 //   1. blocker search: the mean light depth d_b of the map texels, in a region
 //      around the receiver, that are nearer the light than the receiver's plane;
 //      no blocker found: fully lit (the paper's early exit);
 //   2. penumbra estimate: w_p = (d_r - d_b) w_light / d_b (parallel planes);
-//   3. percentage-closer filtering over a disk of that width (shaders/pcf.wgsl).
+//   3. percentage-closer filtering over a disk of that width (passes/pcf_taps.wgsl).
 // Sizes are in map texels. Taps are disk samples (the light is a disk as seen
 // from the receiver): a jittered n x n grid through Shirley and Chiu's map, or
 // the first n x n points of a fixed Poisson-disk set; both rotated per pixel.
@@ -26,8 +29,6 @@ struct PcssPixel {
     blocker: f32,
 };
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
 // center.w: the light's radius.
@@ -160,15 +161,14 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     shadow = shadow_params;
     pcss = pcss_params;
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
+    let px = pixel.px;
     var o = PcssPixel(0.0, 0.0, 0.0);
-    if (!is_background(nt)) {
-        o = pcss_visibility(id.xy, textureLoad(gbuffer_position, px, 0).xyz, nt.xyz);
+    if (pixel.geometry) {
+        o = pcss_visibility(id.xy, pixel.p, pixel.n);
     }
     textureStore(visibility_out, px, vec4<f32>(o.v, 0.0, 0.0, 0.0));
     textureStore(width_out, px, vec4<f32>(o.width, 0.0, 0.0, 0.0));

@@ -110,7 +110,7 @@ impl Method for PenumbraVolumeMaps {
             device,
             pool,
             "pvm::volume_pass",
-            crate::shaders::pvm_volumes(),
+            crate::shaders::compose("methods/pvm/volumes.wgsl"),
             ("vs_main", "fs_main"),
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3],
             &[EDGE_FORMAT, EDGE_FORMAT],
@@ -119,7 +119,7 @@ impl Method for PenumbraVolumeMaps {
             device,
             pool,
             "pvm::visibility_pass",
-            crate::shaders::pvm(),
+            crate::shaders::compose("methods/pvm/visibility.wgsl"),
             &[
                 layout::depth_texture,
                 layout::depth_texture,

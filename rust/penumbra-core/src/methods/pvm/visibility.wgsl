@@ -1,3 +1,6 @@
+#import shaders/receiver.wgsl
+#import passes/shadow_test.wgsl
+
 // PVM pass 3 (Cournia 4.2, listing 4.2): light visibility per camera pixel.
 // Inside a penumbra volume (the PVDM is nearer the light than the pixel),
 // visibility is the fraction of a disk of the light's radius, centred on the
@@ -5,8 +8,6 @@
 // edge and the pixel, that lies on the unoccluded side (Eq. 4.1, 4.2), with
 // the optional 3k^2 - 2k^3 falloff; outside, the shadow-map test decides.
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
 @group(0) @binding(3) var volume_depth: texture_depth_2d;
 @group(0) @binding(4) var edge0_map: texture_2d<f32>;
@@ -55,17 +56,16 @@ fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
+    let px = pixel.px;
     var v = 0.0;
     var inside = 0.0;
-    if (!is_background(nt)) {
-        let p = textureLoad(gbuffer_position, px, 0).xyz;
-        let n = nt.xyz;
+    if (pixel.geometry) {
+        let p = pixel.p;
+        let n = pixel.n;
         let cos_theta = light_cosine(pvm, p, n);
         // Centre below the surface's horizon: the surface itself hides it.
         if (cos_theta > 0.0) {

@@ -1,11 +1,12 @@
+#import shaders/receiver.wgsl
+#import passes/pcf_taps.wgsl
+
 // PVMF pass 3 (Cournia 5.2): visibility estimation per camera pixel. Pixels
 // inside a penumbra volume (the mask is nearer the light than the pixel) or
 // failing the shadow-map test take an n_pcf x n_pcf jittered
 // percentage-closer filter of width w_pcf over the depth shadow map; all
 // others keep the shadow-map test's 0 or 1 and take no taps.
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
 @group(0) @binding(3) var mask_depth: texture_depth_2d;
 @group(0) @binding(4) var edge_distance: texture_2d<f32>;
@@ -85,18 +86,17 @@ fn filter_width(r: Receiver, p: vec3<f32>, d_o: f32) -> vec2<f32> {
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     pvmf = pvmf_params;
     settings = settings_params;
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
+    let px = pixel.px;
     var v = 0.0;
     var blur = 0.0;
     var width = 0.0;
-    if (!is_background(nt)) {
-        let p = textureLoad(gbuffer_position, px, 0).xyz;
-        let n = nt.xyz;
+    if (pixel.geometry) {
+        let p = pixel.p;
+        let n = pixel.n;
         let cos_theta = light_cosine(pvmf, p, n);
         // Centre below the surface's horizon: the surface itself hides it.
         if (cos_theta > 0.0) {

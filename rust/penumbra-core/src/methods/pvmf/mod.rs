@@ -85,19 +85,19 @@ pub struct PvmfParams {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SettingsUniform {
-    s_p: f32,
-    n_pcf: u32,
-    seed: u32,
-    flags: u32,
+    pub(crate) s_p: f32,
+    pub(crate) n_pcf: u32,
+    pub(crate) seed: u32,
+    pub(crate) flags: u32,
 }
 
 /// Layout of `BlurSettings` in `methods/pvmf/blur.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct BlurUniform {
-    step: [i32; 2],
-    half_width: i32,
-    count: u32,
+    pub(crate) step: [i32; 2],
+    pub(crate) half_width: i32,
+    pub(crate) count: u32,
 }
 
 /// Named counters, in the order of `methods/pvmf/estimate.wgsl`'s `counters`.
@@ -215,7 +215,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             device,
             pool,
             "pvmf::mask_pass",
-            crate::shaders::pvmf_mask(),
+            crate::shaders::compose("methods/pvmf/mask.wgsl"),
             ("vs_mask", "fs_mask"),
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32],
             &[DISTANCE_FORMAT],
@@ -225,7 +225,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             device,
             pool,
             "pvmf::estimate_pass",
-            crate::shaders::pvmf(),
+            crate::shaders::compose("methods/pvmf/estimate.wgsl"),
             &[
                 layout::depth_texture,
                 layout::depth_texture,
@@ -244,7 +244,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             device,
             pool,
             "pvmf::blur_pass",
-            crate::shaders::pvmf_blur(),
+            crate::shaders::compose("methods/pvmf/blur.wgsl"),
             &[layout::float_texture, layout::float_texture, layout::parameters, storage, layout::storage_buffer_rw],
             &["main"],
         );

@@ -218,9 +218,9 @@ pub fn visible_cap_cos(distance: f64, bound: f64) -> f64 {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SampleWeightUniform {
     /// The sphere's outward unit normal at the sample; w = 1 for solid-angle weights.
-    normal: [f32; 4],
+    pub(crate) normal: [f32; 4],
     /// The light's centre (xyz).
-    light_center: [f32; 4],
+    pub(crate) light_center: [f32; 4],
 }
 
 pub struct ReferenceShadows {
@@ -261,7 +261,7 @@ impl Method for ReferenceShadows {
             device,
             pool,
             "reference::pass",
-            crate::shaders::reference(),
+            crate::shaders::compose("methods/reference/visibility.wgsl"),
             &[
                 layout::depth_texture,
                 layout::parameters,

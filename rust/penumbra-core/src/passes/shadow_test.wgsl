@@ -1,5 +1,7 @@
+#import shaders/light_space.wgsl
+
 // The shadow-map test from the light centre with its bias schemes (Cournia
-// ch. 3), shared by `hard` and the final pass of `pvm`:
+// ch. 3), shared by every shadow-map method (passes/shadow_test.rs):
 //   mode 0 `slope`: receiver-side normal offset plus slope-scaled depth bias,
 //                   both in texels of the map at the receiver's depth;
 //   mode 1 `second_depth`: map of back faces (front faces culled; Wang and

@@ -1,3 +1,6 @@
+#import shaders/common.wgsl
+#import passes/shadow_test.wgsl
+
 // Shared by the filtering methods (`pcf`, `pcss`, `pvmf`): shadow-map taps
 // away from the receiver's own texel (percentage-closer filtering, Reeves et
 // al. 1987; Cournia ch. 3 and 5.2).
@@ -7,7 +10,6 @@
 // receiver's own depth, so that a wide kernel over a receiver sloped towards
 // the light does not shadow itself. Taps go through a comparison sampler:
 // with linear filtering that is the hardware's 2x2 bilinear PCF.
-// Requires common.wgsl, light_space.wgsl and shadow_test.wgsl.
 
 struct Receiver {
     // A point on the receiver's plane (the biased lookup point) and its unit normal.
