@@ -126,23 +126,11 @@ impl ShadowMapPass {
         )
     }
 
-    /// Renders the scene's depth from `frustum`'s apex into `map`.
-    pub fn record(
-        &self,
-        ctx: &FrameContext<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        map: &PooledTexture,
-        frustum: &LightFrustum,
-        depth: MapDepth,
-        timestamps: Option<PassTimestamps<'_>>,
-    ) {
-        self.record_part(ctx, encoder, map, frustum, depth, timestamps, (true, true));
-    }
-
-    /// [`Self::record`] as part of a named pass made of several wgpu passes:
-    /// `(first, last)` say whether this map opens or closes it.
+    /// Renders the scene's depth from `frustum`'s apex into `map`, as part of
+    /// a named pass that may be made of several wgpu passes: `(first, last)`
+    /// say whether this map opens or closes it (`(true, true)`: the whole pass).
     #[allow(clippy::too_many_arguments)]
-    pub fn record_part(
+    pub fn record(
         &self,
         ctx: &FrameContext<'_>,
         encoder: &mut wgpu::CommandEncoder,
@@ -227,7 +215,7 @@ pub fn centre_map(frame: &mut Frame<'_>, settings: &ShadowMapSettings) -> Result
     let map = frame.cached(CENTRE_MAP.name, key, |frame| {
         let map = ShadowMapPass::create_map(&frame.ctx, settings.map_size);
         frame.pass(CENTRE_MAP.name, |ctx, encoder, ts| {
-            ctx.shared.shadow_map.record(ctx, encoder, &map, ctx.frustum, map_depth, ts)
+            ctx.shared.shadow_map.record(ctx, encoder, &map, ctx.frustum, map_depth, ts, (true, true))
         })?;
         rendered = 1;
         Ok(map)

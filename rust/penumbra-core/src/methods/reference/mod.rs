@@ -334,7 +334,7 @@ impl Method for ReferenceShadows {
             ctx.queue.write_buffer(&weight_buffer, 0, &weights);
             let last = samples.len() - 1;
             for (i, frustum) in frusta.iter().enumerate() {
-                ctx.shared.shadow_map.record_part(ctx, encoder, &map, frustum, depth, timestamps, (i == 0, false));
+                ctx.shared.shadow_map.record(ctx, encoder, &map, frustum, depth, timestamps, (i == 0, false));
                 let bind_group = self.pass.bind_group(
                     ctx,
                     &[
