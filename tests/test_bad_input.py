@@ -111,7 +111,7 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("radiance_and_intensity", lambda r: penumbra.SphereLight((0, 3, 0), 1.0, radiance=1, intensity=1), LightError, ["exactly one"]),
     ("light_intersects_mesh", render(light=penumbra.SphereLight((0, 0.2, 0), 0.3, intensity=1)), SceneError, ["intersects mesh 'quad'"]),
     ("point_light_on_surface", render(light=penumbra.SphereLight((0.5, 0, 0.5), 0.0, intensity=1)), SceneError, ["intersects"]),
-    ("geometry_surrounds_light", render([ground_plane(), sphere((0, 1, 0), 0.5)], light=penumbra.SphereLight((0, 0.3, 0), 0.1, intensity=1)), SceneError, ["surrounds the light"]),
+    ("geometry_surrounds_light_one_frustum", render([ground_plane(), sphere((0, 1, 0), 0.5)], light=penumbra.SphereLight((0, 0.3, 0), 0.1, intensity=1), projection="frustum"), SceneError, ["surrounds the light", "projection='auto'"]),
     # Cameras and images
     ("zero_width", render(camera=CAMERA.with_size(0, 32)), CameraError, ["at least 1x1", "0x32"]),
     ("zero_height", render(camera=CAMERA.with_size(32, 0)), CameraError, ["0"]),
@@ -170,7 +170,8 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("intensity_nan", render(light=penumbra.SphereLight((0, 3, 0), 0.3, intensity=(1, np.nan, 1))), LightError, ["intensity", "finite"]),
     ("radiance_overflows_intensity", render(light=penumbra.SphereLight((0, 1e19, 0), 1e18, radiance=1e30)), LightError, ["intensity", "finite"]),
     ("huge_radius_swallows_scene", render(light=penumbra.SphereLight((0, 3, 0), 1e6, intensity=1)), SceneError, ["intersects mesh 'quad'"]),
-    ("light_inside_closed_box", render([box((0, 1, 0), (2, 2, 2), name="room")], light=penumbra.SphereLight((0, 1, 0), 0.2, intensity=1), method="pvm"), SceneError, ["surrounds the light"]),
+    ("light_inside_closed_box_one_frustum", render([box((0, 1, 0), (2, 2, 2), name="room")], light=penumbra.SphereLight((0, 1, 0), 0.2, intensity=1), method="pvm", projection="frustum"), SceneError, ["surrounds the light"]),
+    ("projection_unknown", render(projection="sphere"), ParameterError, ["projection", "'auto', 'frustum', 'cube'"]),
     ("fov_negative", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=-10, width=8, height=8)), CameraError, ["fov_y"]),
     ("fov_nan", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=float("nan"), width=8, height=8)), CameraError, ["fov_y"]),
     ("fov_string", lambda r: penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y="wide"), CameraError, ["fov_y", "real number"]),

@@ -14,12 +14,12 @@ use std::cell::OnceCell;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 
 use crate::error::{Error, Result};
 use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
 use crate::gpu::{PassTimestamps, Profiler};
-use crate::light_frustum::LightFrustum;
+use crate::light_frustum::{LightProjection, ProjectionMode};
 use crate::pass_cache::{Entry, PassCache, PassKey};
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::samplers::ComparisonSamplers;
@@ -48,24 +48,28 @@ pub struct Light {
     pub radius: f64,
 }
 
-/// A method's intermediate image, read back on request.
+/// A method's intermediate image, read back on request: (rows, columns) or
+/// (rows, columns, channels), with a leading layer axis for a texture of
+/// several layers (cube faces).
 pub struct Intermediate {
     pub name: &'static str,
     pub texture: wgpu::Texture,
     pub aspect: wgpu::TextureAspect,
     /// Channels kept of those stored.
     pub channels: usize,
-    /// A linear-depth map storing depth / far: read back in world units.
-    pub linear_depth: bool,
+    /// Multiplies the stored values: a linear-depth map stores depth / far
+    /// and is read back in world units (`far`); 1 for other images.
+    pub scale: f32,
 }
 
 impl Intermediate {
-    pub fn depth(name: &'static str, texture: &wgpu::Texture) -> Self {
-        Self { name, texture: texture.clone(), aspect: wgpu::TextureAspect::DepthOnly, channels: 1, linear_depth: true }
+    /// A linear-depth map of a projection whose far plane is `far`.
+    pub fn depth(name: &'static str, texture: &wgpu::Texture, far: f32) -> Self {
+        Self { name, texture: texture.clone(), aspect: wgpu::TextureAspect::DepthOnly, channels: 1, scale: far }
     }
 
     pub fn color(name: &'static str, texture: &wgpu::Texture, channels: usize) -> Self {
-        Self { name, texture: texture.clone(), aspect: wgpu::TextureAspect::All, channels, linear_depth: false }
+        Self { name, texture: texture.clone(), aspect: wgpu::TextureAspect::All, channels, scale: 1.0 }
     }
 }
 
@@ -80,8 +84,6 @@ pub struct FrameContext<'r> {
     pub camera: &'r Camera,
     /// Image size in pixels.
     pub size: (u32, u32),
-    /// The shadow-map frustum from the light centre.
-    pub frustum: &'r LightFrustum,
     pub light: Light,
     pub gbuffer: Arc<GBuffer>,
     /// The G-buffer's pass-cache key (passes that read it include it in theirs).
@@ -90,6 +92,10 @@ pub struct FrameContext<'r> {
     pub geometry: [u8; 8],
     /// The triangle corners, uploaded on first use.
     vertices: OnceCell<PooledBuffer>,
+    /// Their positions, for projection fits.
+    corner_positions: OnceCell<Vec<Vec3>>,
+    /// The light centre's projections fitted so far, by mode.
+    projections: std::cell::RefCell<Vec<(ProjectionMode, Arc<LightProjection>)>>,
     /// Pooled resources this frame took: in use until the frame ends.
     held: std::cell::RefCell<Vec<Arc<dyn Any + Send + Sync>>>,
 }
@@ -104,7 +110,6 @@ impl<'r> FrameContext<'r> {
         scene: &'r Scene,
         prepared: &'r PreparedScene,
         camera: &'r Camera,
-        frustum: &'r LightFrustum,
         gbuffer: (Arc<GBuffer>, PassKey),
         geometry: [u8; 8],
     ) -> Self {
@@ -124,14 +129,32 @@ impl<'r> FrameContext<'r> {
             prepared,
             camera,
             size: (camera.width, camera.height),
-            frustum,
             light,
             gbuffer: gbuffer.0,
             gbuffer_key: gbuffer.1,
             geometry,
             vertices: OnceCell::new(),
+            corner_positions: OnceCell::new(),
+            projections: Default::default(),
             held: Default::default(),
         }
+    }
+
+    /// The triangle corners' positions, three per triangle.
+    pub fn corner_positions(&self) -> &[Vec3] {
+        self.corner_positions.get_or_init(|| self.prepared.corners.iter().map(|c| Vec3::from(c.position)).collect())
+    }
+
+    /// The shadow-map projection from the light centre that `mode` asks for
+    /// (fitted once per frame and mode): the fitted frustum, or cube faces.
+    pub fn projection(&self, mode: ProjectionMode) -> Result<Arc<LightProjection>> {
+        if let Some((_, p)) = self.projections.borrow().iter().find(|(m, _)| *m == mode) {
+            return Ok(p.clone());
+        }
+        let corners = self.corner_positions();
+        let fitted = Arc::new(LightProjection::fit(Vec3::from(self.light.center_f32), corners, corners, mode)?);
+        self.projections.borrow_mut().push((mode, fitted.clone()));
+        Ok(fitted)
     }
 
     /// The scene's triangle corners as a vertex buffer, and their count.
@@ -156,7 +179,18 @@ impl<'r> FrameContext<'r> {
 
     /// A pooled texture, in use until the frame ends.
     pub fn texture(&self, label: &str, size: (u32, u32), format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> PooledTexture {
-        let texture = self.pool.texture(self.device, label, TextureKey { size, format, usage });
+        self.texture_of(label, TextureKey::plain(size, format, usage))
+    }
+
+    /// A pooled light-space image of one layer per projection face
+    /// (shadow maps and what else is rendered from the light), in use until
+    /// the frame ends.
+    pub fn light_texture(&self, label: &str, map_size: u32, layers: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> PooledTexture {
+        self.texture_of(label, TextureKey { size: (map_size, map_size), format, usage, layers })
+    }
+
+    fn texture_of(&self, label: &str, key: TextureKey) -> PooledTexture {
+        let texture = self.pool.texture(self.device, label, key);
         self.hold(&texture);
         texture
     }

@@ -23,7 +23,7 @@ use std::any::Any;
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex};
 
-use crate::light_frustum::LightFrustum;
+use crate::light_frustum::{LightFrustum, LightProjection};
 use crate::scene::PreparedScene;
 
 /// A pass whose output may be cached: its name (as in `timings` and in the
@@ -78,6 +78,15 @@ impl PassKey {
             .f32s(&f.projection.to_cols_array())
             .f32s(&f.window.to_array())
             .f32s(&[f.near, f.far])
+    }
+
+    /// Every face of a projection and which are rendered.
+    pub fn projection(&mut self, p: &LightProjection) -> &mut Self {
+        self.u32(p.active).f32s(&p.origin.to_array());
+        for face in &p.faces {
+            self.frustum(face);
+        }
+        self
     }
 
     pub fn finish(&mut self) -> Self {

@@ -9,14 +9,11 @@ use std::collections::BTreeMap;
 use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
-use glam::Vec3;
-
 use crate::error::{Error, Result};
 use crate::frame::{Frame, FrameContext, SharedPasses};
 use crate::gpu::pool::{PoolStats, ResourcePool};
 use crate::gpu::readback::{self, PendingReadback};
 use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
-use crate::light_frustum::LightFrustum;
 use crate::methods::{DynMethod, MethodConfig, ParamValue, REGISTRY};
 use crate::pass_cache::{CachedPass, PassCache, PassKey};
 use crate::passes::gbuffer::{GBuffer, GBufferPass, GBUFFER};
@@ -186,8 +183,7 @@ impl Renderer {
                 prepared.triangle_count
             )));
         }
-        let frustum = LightFrustum::fit(Vec3::from(scene.light.center), prepared.corners.iter().map(|c| Vec3::from(c.position)))?;
-        let result = self.ctx.scoped(|| self.record_and_read(scene, camera, method, options, &prepared, &frustum));
+        let result = self.ctx.scoped(|| self.record_and_read(scene, camera, method, options, &prepared));
         // Every handle of the frame is dropped: its resources are free again.
         self.pool.end_frame();
         let mut result = result?;
@@ -202,7 +198,6 @@ impl Renderer {
         method: &MethodConfig,
         options: &RenderOptions,
         prepared: &PreparedScene,
-        frustum: &LightFrustum,
     ) -> Result<RenderResult> {
         let device = &self.ctx.device;
         let size = (camera.width, camera.height);
@@ -229,7 +224,6 @@ impl Renderer {
             scene,
             prepared,
             camera,
-            frustum,
             (gbuffer.clone(), gbuffer_key.clone()),
             geometry,
         );
@@ -328,18 +322,21 @@ impl Renderer {
         }
         for i in &record.intermediates {
             let raw = readback::cast_vec::<f32>(bytes.next().unwrap_or_default());
-            let (w, h) = (i.texture.width() as usize, i.texture.height() as usize);
-            let stored = raw.len() / (w * h).max(1);
+            let (w, h, layers) = (i.texture.width() as usize, i.texture.height() as usize, i.texture.depth_or_array_layers() as usize);
+            let stored = raw.len() / (w * h * layers).max(1);
             let mut data: Vec<f32> = if stored == i.channels {
                 raw
             } else {
                 raw.chunks_exact(stored).flat_map(|t| t[..i.channels].to_vec()).collect()
             };
-            if i.linear_depth {
-                // Stored as depth / far: hand back world-unit light depth.
-                data.iter_mut().for_each(|d| *d *= frustum.far);
+            if i.scale != 1.0 {
+                // A linear-depth map stores depth / far: hand back world-unit light depth.
+                data.iter_mut().for_each(|d| *d *= i.scale);
             }
-            let shape = if i.channels == 1 { vec![h, w] } else { vec![h, w, i.channels] };
+            let mut shape = if i.channels == 1 { vec![h, w] } else { vec![h, w, i.channels] };
+            if layers > 1 {
+                shape.insert(0, layers);
+            }
             images.push(Image { name: i.name.into(), shape, data: ImageData::F32(data) });
         }
         let mut timings = timings;

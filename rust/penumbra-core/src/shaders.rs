@@ -169,7 +169,7 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
     use crate::methods::{pcf, pcss, pvmf, reference};
     use crate::passes::{gbuffer, shading, shadow_map, shadow_test};
     vec![
-        gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth }),
+        gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
         gpu_struct!(shadow_map::ShadowUniforms => "ShadowUniforms" in "passes/light_view.wgsl" { view_proj, view, depth }),
         gpu_struct!(shadow_test::ShadowTestUniform => "ShadowTest" in "passes/shadow_test.wgsl" { light_space, center, bias, mode }),
         gpu_struct!(gbuffer::CameraUniforms => "CameraUniforms" in "passes/gbuffer.wgsl" { view_proj, view }),

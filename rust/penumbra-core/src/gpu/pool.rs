@@ -43,11 +43,13 @@ impl<T> Deref for Pooled<T> {
     }
 }
 
-/// A texture from the pool, with its default view.
+/// A texture from the pool, with its default view (an array view for an
+/// array texture) and, for an array, a view of each layer (render targets).
 #[derive(Debug)]
 pub struct PoolTexture {
     pub texture: wgpu::Texture,
     pub view: wgpu::TextureView,
+    pub layer_views: Vec<wgpu::TextureView>,
 }
 
 impl Deref for PoolTexture {
@@ -66,6 +68,14 @@ pub struct TextureKey {
     pub size: (u32, u32),
     pub format: wgpu::TextureFormat,
     pub usage: wgpu::TextureUsages,
+    /// Array layers, or 0 for a plain 2D texture (bound as `texture_2d`).
+    pub layers: u32,
+}
+
+impl TextureKey {
+    pub fn plain(size: (u32, u32), format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> Self {
+        Self { size, format, usage, layers: 0 }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -165,7 +175,7 @@ pub struct PoolStats {
 
 fn texture_bytes(key: &TextureKey) -> u64 {
     let texel = key.format.block_copy_size(None).or_else(|| key.format.block_copy_size(Some(wgpu::TextureAspect::DepthOnly)));
-    key.size.0 as u64 * key.size.1 as u64 * texel.unwrap_or(4) as u64
+    key.size.0 as u64 * key.size.1 as u64 * key.layers.max(1) as u64 * texel.unwrap_or(4) as u64
 }
 
 impl Default for ResourcePool {
@@ -208,9 +218,29 @@ impl ResourcePool {
         if let Some(handle) = take_free(slots, now) {
             return handle;
         }
-        let texture = crate::gpu::layout::create_texture(device, label, key.size, key.format, key.usage);
-        let view = crate::gpu::layout::view(&texture);
-        let handle = Arc::new(Pooled { id: self.new_id(), resource: PoolTexture { texture, view }, bytes: texture_bytes(&key) });
+        let (texture, view, layer_views) = if key.layers == 0 {
+            let texture = crate::gpu::layout::create_texture(device, label, key.size, key.format, key.usage);
+            let view = crate::gpu::layout::view(&texture);
+            (texture, view, Vec::new())
+        } else {
+            let texture = crate::gpu::layout::create_array_texture(device, label, key.size, key.layers, key.format, key.usage);
+            let view = texture.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            });
+            let layers = (0..key.layers)
+                .map(|layer| {
+                    texture.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2),
+                        base_array_layer: layer,
+                        array_layer_count: Some(1),
+                        ..Default::default()
+                    })
+                })
+                .collect();
+            (texture, view, layers)
+        };
+        let handle = Arc::new(Pooled { id: self.new_id(), resource: PoolTexture { texture, view, layer_views }, bytes: texture_bytes(&key) });
         slots.push(Slot { handle: handle.clone(), last_used: now });
         handle
     }

@@ -25,7 +25,7 @@ pub fn copy_texture(
     texture: &wgpu::Texture,
     aspect: wgpu::TextureAspect,
 ) -> PendingReadback {
-    let (width, height) = (texture.width(), texture.height());
+    let (width, height, layers) = (texture.width(), texture.height(), texture.depth_or_array_layers());
     let bytes_per_texel = texture
         .format()
         .block_copy_size(Some(aspect))
@@ -33,7 +33,7 @@ pub fn copy_texture(
     let row_bytes = width * bytes_per_texel;
     let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let padded_row_bytes = row_bytes.div_ceil(align) * align;
-    let buffer = pool.buffer(device, "penumbra::readback", padded_row_bytes as u64 * height as u64, READBACK);
+    let buffer = pool.buffer(device, "penumbra::readback", padded_row_bytes as u64 * height as u64 * layers as u64, READBACK);
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {
             texture,
@@ -49,9 +49,10 @@ pub fn copy_texture(
                 rows_per_image: Some(height),
             },
         },
-        wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        wgpu::Extent3d { width, height, depth_or_array_layers: layers },
     );
-    PendingReadback { buffer, width, height, row_bytes, padded_row_bytes }
+    // Layers follow each other: as many rows again per layer.
+    PendingReadback { buffer, width, height: height * layers, row_bytes, padded_row_bytes }
 }
 
 /// Records a copy of the first `bytes` (a multiple of 4) of `source` into a mappable buffer.

@@ -40,9 +40,9 @@ impl GBuffer {
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;
         Self {
-            position: pool.texture(device, "gbuffer::position", TextureKey { size, format: POSITION_FORMAT, usage }),
-            normal: pool.texture(device, "gbuffer::normal", TextureKey { size, format: NORMAL_FORMAT, usage }),
-            depth: pool.texture(device, "gbuffer::depth", TextureKey { size, format: DEPTH_FORMAT, usage: wgpu::TextureUsages::RENDER_ATTACHMENT }),
+            position: pool.texture(device, "gbuffer::position", TextureKey::plain(size, POSITION_FORMAT, usage)),
+            normal: pool.texture(device, "gbuffer::normal", TextureKey::plain(size, NORMAL_FORMAT, usage)),
+            depth: pool.texture(device, "gbuffer::depth", TextureKey::plain(size, DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT)),
             size,
         }
     }

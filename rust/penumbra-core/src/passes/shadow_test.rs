@@ -13,7 +13,7 @@
 //! first and second surfaces, also without bias; `none` shows the raw acne.
 
 use crate::error::{Error, Result};
-use crate::light_frustum::LightFrustum;
+use crate::light_frustum::{LightProjection, ProjectionMode};
 use crate::methods::{ParamSet, ParamSpec};
 use crate::passes::shadow_map::{LightSpaceUniform, MapDepth};
 
@@ -60,6 +60,8 @@ impl BiasMode {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShadowMapSettings {
     pub map_size: u32,
+    /// Which projection the maps use (SPEC section 3).
+    pub projection: ProjectionMode,
     pub bias: BiasMode,
     pub normal_offset: f32,
     pub constant_bias: f32,
@@ -75,7 +77,13 @@ impl ShadowMapSettings {
     /// [`BiasMode::NAMES`]).
     pub fn specs(default_bias: &'static str) -> Vec<ParamSpec> {
         vec![
-            ParamSpec::int("map_size", 2048, 16, 16384, "shadow-map resolution in texels per side"),
+            ParamSpec::int("map_size", 2048, 16, 16384, "shadow-map resolution in texels per side (per face for cube maps)"),
+            ParamSpec::choice(
+                "projection",
+                "auto",
+                &ProjectionMode::NAMES,
+                "shadow maps over one fitted frustum, six cube faces, or the frustum where it covers the geometry and the cube elsewhere",
+            ),
             ParamSpec::choice("bias", default_bias, &BiasMode::NAMES, "acne control of the shadow-map test"),
             ParamSpec::float("normal_offset", 1.0, 0.0, 100.0, "receiver offset along its normal, texels (slope bias)"),
             ParamSpec::float("constant_bias", 0.5, 0.0, 100.0, "constant depth bias, texels (slope bias)"),
@@ -86,6 +94,7 @@ impl ShadowMapSettings {
     pub fn from_params(p: &ParamSet) -> Self {
         Self {
             map_size: p.int("map_size") as u32,
+            projection: ProjectionMode::parse(p.choice("projection")),
             bias: BiasMode::parse(p.choice("bias")),
             normal_offset: p.float("normal_offset") as f32,
             constant_bias: p.float("constant_bias") as f32,
@@ -105,7 +114,7 @@ impl ShadowMapSettings {
     }
 
     /// The `ShadowTest` block of `shadow_test.wgsl`.
-    pub fn uniform(&self, frustum: &LightFrustum, center: [f32; 3], radius: f32, flags: u32) -> ShadowTestUniform {
+    pub fn uniform(&self, projection: &LightProjection, center: [f32; 3], radius: f32, flags: u32) -> ShadowTestUniform {
         let mode = match self.bias {
             BiasMode::Slope => 0,
             BiasMode::SecondDepth => 1,
@@ -113,7 +122,7 @@ impl ShadowMapSettings {
             BiasMode::Midpoint => 3,
         };
         ShadowTestUniform {
-            light_space: LightSpaceUniform::new(frustum, self.map_size),
+            light_space: LightSpaceUniform::new(projection, self.map_size),
             center: [center[0], center[1], center[2], radius],
             bias: [self.normal_offset, self.constant_bias, self.slope_bias, MAX_SLOPE],
             mode: [mode, flags, 0, 0],

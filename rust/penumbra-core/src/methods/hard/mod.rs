@@ -42,7 +42,7 @@ impl Method for HardShadow {
             pool,
             "hard::visibility_pass",
             crate::shaders::compose("methods/hard/visibility.wgsl"),
-            &[layout::depth_texture, layout::parameters, |b| layout::storage_texture(b, VISIBILITY_FORMAT)],
+            &[layout::depth_array, layout::parameters, |b| layout::storage_texture(b, VISIBILITY_FORMAT)],
             &["main"],
         );
         Self { visibility }
@@ -50,10 +50,10 @@ impl Method for HardShadow {
 
     /// The shadow-map test per G-buffer pixel.
     fn record(&self, frame: &mut Frame<'_>, params: &HardParams) -> Result<MethodOutput> {
-        let map = shadow_map::centre_map(frame, params)?;
+        let (map, projection) = shadow_map::centre_map(frame, params)?;
         let visibility = frame.ctx.screen_texture("hard::visibility");
         frame.pass("visibility", |ctx, encoder, ts| {
-            let uniforms = ctx.parameters("hard::uniforms", &params.uniform(ctx.frustum, ctx.light.center_f32, 0.0, 0));
+            let uniforms = ctx.parameters("hard::uniforms", &params.uniform(&projection, ctx.light.center_f32, 0.0, 0));
             self.visibility.run(ctx, encoder, &[Binding::Texture(&map), Binding::Buffer(&uniforms), Binding::Texture(&visibility)], ts);
         })?;
         Ok(MethodOutput { visibility })

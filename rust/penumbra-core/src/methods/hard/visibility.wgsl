@@ -4,7 +4,7 @@
 // Method `hard`: the shadow-map test from the light centre (Williams 1978),
 // visibility 0 or 1; the test and its bias schemes are in passes/shadow_test.wgsl.
 
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(3) var<storage, read> hard: ShadowTest;
 @group(0) @binding(4) var visibility_out: texture_storage_2d<r32float, write>;
 

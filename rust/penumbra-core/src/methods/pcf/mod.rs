@@ -84,7 +84,7 @@ impl Method for PercentageCloserFiltering {
             "pcf::visibility_pass",
             crate::shaders::compose("methods/pcf/visibility.wgsl"),
             &[
-                layout::depth_texture,
+                layout::depth_array,
                 layout::comparison_sampler,
                 layout::parameters,
                 layout::parameters,
@@ -97,10 +97,10 @@ impl Method for PercentageCloserFiltering {
 
     /// The filtered test per G-buffer pixel.
     fn record(&self, frame: &mut Frame<'_>, params: &PcfParams) -> Result<MethodOutput> {
-        let map = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
         let visibility = frame.ctx.screen_texture("pcf::visibility");
         frame.pass("visibility", |ctx, encoder, ts| {
-            let test = ctx.parameters("pcf::shadow_test_uniforms", &params.shadow.uniform(ctx.frustum, ctx.light.center_f32, 0.0, 0));
+            let test = ctx.parameters("pcf::shadow_test_uniforms", &params.shadow.uniform(&projection, ctx.light.center_f32, 0.0, 0));
             let kernel = PcfUniform {
                 kernel: params.kernel,
                 samples: params.samples,

@@ -16,7 +16,7 @@ struct PcfKernel {
     nearest: u32,
 };
 
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
 @group(0) @binding(4) var<storage, read> shadow_params: ShadowTest;
 @group(0) @binding(5) var<storage, read> pcf_params: PcfKernel;

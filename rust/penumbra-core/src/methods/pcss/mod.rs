@@ -119,7 +119,7 @@ impl Method for PercentageCloserSoftShadows {
             "pcss::visibility_pass",
             crate::shaders::compose("methods/pcss/visibility.wgsl"),
             &[
-                layout::depth_texture,
+                layout::depth_array,
                 layout::comparison_sampler,
                 layout::parameters,
                 layout::parameters,
@@ -135,7 +135,7 @@ impl Method for PercentageCloserSoftShadows {
 
     /// Blocker search, penumbra estimate and filter per G-buffer pixel.
     fn record(&self, frame: &mut Frame<'_>, params: &PcssParams) -> Result<MethodOutput> {
-        let map = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
         let visibility = frame.ctx.screen_texture("pcss::visibility");
         // Estimated penumbra width in map texels and mean blocker depth in
         // world units (camera space, 0 where not computed).
@@ -145,7 +145,7 @@ impl Method for PercentageCloserSoftShadows {
             let counters = ctx.counters("pcss::counters", COUNTER_NAMES.len(), encoder);
             let test = ctx.parameters(
                 "pcss::shadow_test_uniforms",
-                &params.shadow.uniform(ctx.frustum, ctx.light.center_f32, ctx.light.radius_f32, 0),
+                &params.shadow.uniform(&projection, ctx.light.center_f32, ctx.light.radius_f32, 0),
             );
             let sampling = PcssUniform {
                 blocker_samples: params.blocker_samples,

@@ -29,7 +29,7 @@ struct PcssPixel {
     blocker: f32,
 };
 
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
 // center.w: the light's radius.
 @group(0) @binding(4) var<storage, read> shadow_params: ShadowTest;
@@ -83,11 +83,15 @@ fn disk_tap(px: vec2<u32>, i: u32, n: u32, stream: u32, rot: vec2<f32>) -> vec2<
     return vec2<f32>(rot.x * s.x - rot.y * s.y, rot.y * s.x + rot.x * s.y);
 }
 
-// World-unit light depth stored in the map at the texel under `c` (no comparison).
-fn texel_depth(c: vec2<f32>) -> f32 {
-    let size = vec2<i32>(textureDimensions(shadow_map));
-    let t = clamp(vec2<i32>(floor(c)), vec2<i32>(0), size - 1);
-    return textureLoad(shadow_map, t, 0) * shadow.light_space.depth.y;
+// World-unit light depth, along the axis of `layer`, of the surface stored
+// in the map at the texel under `c` (coordinates in `layer`; on a cube,
+// beyond its edges they read the neighbour face; no comparison).
+fn texel_depth(layer: i32, c: vec2<f32>) -> f32 {
+    let ls = shadow.light_space;
+    let m = map_wrap(ls, layer, c);
+    // The read layer's depth per unit depth along `layer`'s axis is positive:
+    // the direction's dominant axis is the read face's.
+    return map_point_depth(ls, shadow_map, m) / layer_depth_scale(ls, layer, c, m.layer);
 }
 
 fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
@@ -121,7 +125,7 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
     var blockers = 0u;
     for (var i = 0u; i < nb * nb; i++) {
         let c = r.coords + search * disk_tap(px, i, nb, BLOCKER_STREAM, rot);
-        let z = texel_depth(c);
+        let z = texel_depth(r.layer, c);
         if (z < plane_depth(shadow, r, c) - r.bias) {
             blocker_sum += z;
             blockers += 1u;

@@ -23,7 +23,7 @@ use crate::error::Result;
 use crate::frame::{Frame, Intermediate};
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
-use crate::light_frustum::LightFrustum;
+use crate::light_frustum::LightProjection;
 use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::shading::VISIBILITY_FORMAT;
@@ -59,13 +59,13 @@ pub struct PvmVolumes {
     pub silhouette_cache_hits: usize,
 }
 
-/// What pass 2 reads besides the geometry: the light, the frustum, the map
-/// size and `open_edges` (appended to the pass-cache key).
-pub fn volumes_key(params: &PvmParams, frustum: &LightFrustum, (l, r): (DVec3, f64), key: &mut PassKey) {
+/// What pass 2 reads besides the geometry: the light, the projection, the
+/// map size and `open_edges` (appended to the pass-cache key).
+pub fn volumes_key(params: &PvmParams, projection: &LightProjection, (l, r): (DVec3, f64), key: &mut PassKey) {
     key.f64s(&l.to_array())
         .f64s(&[r])
         .bytes(params.open_edges.name().as_bytes())
-        .frustum(frustum)
+        .projection(projection)
         .u32(params.shadow.map_size);
 }
 
@@ -121,10 +121,10 @@ impl Method for PenumbraVolumeMaps {
             "pvm::visibility_pass",
             crate::shaders::compose("methods/pvm/visibility.wgsl"),
             &[
-                layout::depth_texture,
-                layout::depth_texture,
-                layout::float_texture,
-                layout::float_texture,
+                layout::depth_array,
+                layout::depth_array,
+                layout::float_array,
+                layout::float_array,
                 layout::parameters,
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
@@ -136,16 +136,16 @@ impl Method for PenumbraVolumeMaps {
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmParams) -> Result<MethodOutput> {
-        let map = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
         let light = frame.ctx.light;
         let (l, r) = (light.center, light.radius);
         let mut key = PassKey::new(PENUMBRA_VOLUMES.name);
         key.bytes(&frame.ctx.geometry);
-        volumes_key(params, frame.ctx.frustum, (l, r), &mut key);
+        volumes_key(params, &projection, (l, r), &mut key);
         let mut fresh = false;
         let volumes = frame.cached(PENUMBRA_VOLUMES.name, key.finish(), |frame| {
             fresh = true;
-            self.record_volumes(frame, params).map(Arc::new)
+            self.record_volumes(frame, params, &projection).map(Arc::new)
         })?;
         let visibility = frame.ctx.screen_texture("pvm::visibility");
         let membership = frame.ctx.screen_texture("pvm::in_volume");
@@ -154,7 +154,7 @@ impl Method for PenumbraVolumeMaps {
             let flags = u32::from(params.falloff);
             let uniforms = ctx.parameters(
                 "pvm::visibility_uniforms",
-                &params.shadow.uniform(ctx.frustum, light.center_f32, light.radius_f32, flags),
+                &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags),
             );
             let resources = [
                 Binding::Texture(&map),
@@ -176,7 +176,7 @@ impl Method for PenumbraVolumeMaps {
         frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
         frame.stat("silhouette_cache_hits", if fresh { volumes.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counter, &["pixels_in_volume"]);
-        frame.intermediate(Intermediate::depth("pvm_volume_depth", &volumes.volume_depth));
+        frame.intermediate(Intermediate::depth("pvm_volume_depth", &volumes.volume_depth, projection.far()));
         frame.intermediate(Intermediate::color("pvm_edge0", &volumes.edge0, 3));
         frame.intermediate(Intermediate::color("pvm_edge1", &volumes.edge1, 3));
         frame.intermediate(Intermediate::color("pvm_in_volume", &membership, 1));
@@ -187,11 +187,11 @@ impl Method for PenumbraVolumeMaps {
 impl PenumbraVolumeMaps {
     /// Pass 2: builds the penumbra volumes of every silhouette edge (4.1.2)
     /// and renders them into the penumbra volume map (4.1.3).
-    fn record_volumes(&self, frame: &mut Frame<'_>, params: &PvmParams) -> Result<PvmVolumes> {
+    fn record_volumes(&self, frame: &mut Frame<'_>, params: &PvmParams, projection: &LightProjection) -> Result<PvmVolumes> {
         let map = params.shadow.map_size;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
-        let edge0 = frame.ctx.texture("pvm::edge0_map", (map, map), EDGE_FORMAT, usage);
-        let edge1 = frame.ctx.texture("pvm::edge1_map", (map, map), EDGE_FORMAT, usage);
+        let edge0 = frame.ctx.light_texture("pvm::edge0_map", map, projection.layers(), EDGE_FORMAT, usage);
+        let edge1 = frame.ctx.light_texture("pvm::edge1_map", map, projection.layers(), EDGE_FORMAT, usage);
         // The CPU work (silhouettes and volumes) is part of the pass's time.
         let (volume_depth, stats, silhouette_cache_hits) = frame.pass("penumbra_volumes", |ctx, encoder, ts| -> Result<_> {
             let (l, r) = (ctx.light.center, ctx.light.radius);
@@ -200,10 +200,11 @@ impl PenumbraVolumeMaps {
             if r > 0.0 {
                 let (edges, hits) = ctx.shared.silhouettes.edges(ctx.prepared, l, params.open_edges)?;
                 cache_hits = hits;
-                let reach = 4.0 * ctx.frustum.far as f64 + 4.0 * r;
+                // Beyond the far plane of every face (at most sqrt(3) far from the light).
+                let reach = 4.0 * projection.far() as f64 + 4.0 * r;
                 (vertices, stats) = penumbra_volumes(&edges, l, r, reach);
             }
-            let depth = self.volume_pass.record(ctx, encoder, ctx.frustum, &vertices, map, &[&edge0, &edge1], ts)?;
+            let depth = self.volume_pass.record(ctx, encoder, projection, &vertices, map, &[&edge0, &edge1], ts)?;
             Ok((depth, stats, cache_hits))
         })??;
         Ok(PvmVolumes { volume_depth, edge0, edge1, stats, silhouette_cache_hits })

@@ -27,7 +27,7 @@ use crate::error::Result;
 use crate::frame::{Frame, Intermediate};
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledBuffer, PooledTexture, ResourcePool};
-use crate::light_frustum::LightFrustum;
+use crate::light_frustum::LightProjection;
 use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::samplers::Filter;
@@ -130,21 +130,21 @@ pub fn blurs(params: &PvmfParams, radius: f64) -> bool {
     params.n_blur > 0 && radius > 0.0
 }
 
-/// What pass 2 reads besides the geometry: the light, the frustum, the map
-/// size and the volume parameters (appended to the pass-cache key).
-pub fn mask_key(params: &PvmfParams, frustum: &LightFrustum, (l, r): (DVec3, f64), key: &mut PassKey) {
+/// What pass 2 reads besides the geometry: the light, the projection, the
+/// map size and the volume parameters (appended to the pass-cache key).
+pub fn mask_key(params: &PvmfParams, projection: &LightProjection, (l, r): (DVec3, f64), key: &mut PassKey) {
     let offsets = if params.offsets == Offsets::Unit { "unit" } else { "radius" };
     key.f64s(&l.to_array())
         .f64s(&[r, params.s_e])
         .bytes(offsets.as_bytes())
         .bytes(params.open_edges.name().as_bytes())
-        .frustum(frustum)
+        .projection(projection)
         .u32(params.shadow.map_size);
 }
 
 /// The uniform blocks of pass 3.
-fn estimate_uniforms(params: &PvmfParams, frustum: &LightFrustum, light: ([f32; 3], f32)) -> (ShadowTestUniform, SettingsUniform) {
-    let test = params.shadow.uniform(frustum, light.0, light.1, 0);
+fn estimate_uniforms(params: &PvmfParams, projection: &LightProjection, light: ([f32; 3], f32)) -> (ShadowTestUniform, SettingsUniform) {
+    let test = params.shadow.uniform(projection, light.0, light.1, 0);
     let flags = u32::from(params.kernel == Kernel::Disk) | (u32::from(!params.filter_umbra) << 1);
     let settings = SettingsUniform { s_p: params.s_p as f32, n_pcf: params.n_pcf, seed: params.seed as u32, flags };
     (test, settings)
@@ -152,8 +152,8 @@ fn estimate_uniforms(params: &PvmfParams, frustum: &LightFrustum, light: ([f32; 
 
 /// What pass 3 reads besides the G-buffer, the shadow map and the mask: its
 /// uniform blocks, bit for bit, and the comparison sampler.
-pub fn estimate_key(params: &PvmfParams, frustum: &LightFrustum, light: ([f32; 3], f32), key: &mut PassKey) {
-    let (test, settings) = estimate_uniforms(params, frustum, light);
+pub fn estimate_key(params: &PvmfParams, projection: &LightProjection, light: ([f32; 3], f32), key: &mut PassKey) {
+    let (test, settings) = estimate_uniforms(params, projection, light);
     key.pod(&test).pod(&settings).bytes(params.filter.name().as_bytes());
 }
 
@@ -227,9 +227,9 @@ impl Method for PenumbraVolumeMaskFiltering {
             "pvmf::estimate_pass",
             crate::shaders::compose("methods/pvmf/estimate.wgsl"),
             &[
-                layout::depth_texture,
-                layout::depth_texture,
-                layout::float_texture,
+                layout::depth_array,
+                layout::depth_array,
+                layout::float_array,
                 layout::comparison_sampler,
                 layout::parameters,
                 layout::parameters,
@@ -252,23 +252,23 @@ impl Method for PenumbraVolumeMaskFiltering {
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmfParams) -> Result<MethodOutput> {
-        let map = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
         let light = frame.ctx.light;
         let (l, r) = (light.center, light.radius);
         let mut mask_key = PassKey::new(MASK.name);
         mask_key.bytes(&frame.ctx.geometry);
-        self::mask_key(params, frame.ctx.frustum, (l, r), &mut mask_key);
+        self::mask_key(params, &projection, (l, r), &mut mask_key);
         let mask_key = mask_key.finish();
         let mut fresh_mask = false;
         let mask = frame.cached(MASK.name, mask_key.clone(), |frame| {
             fresh_mask = true;
-            self.record_mask(frame, params).map(Arc::new)
+            self.record_mask(frame, params, &projection).map(Arc::new)
         })?;
         // The estimate reads the G-buffer, the shadow map and the mask (their
         // keys), and its own uniforms: everything but n_blur.
         let mut key = PassKey::new(ESTIMATION.name);
-        key.key(&frame.ctx.gbuffer_key).key(&shadow_map::centre_map_key(&frame.ctx, &params.shadow)).key(&mask_key);
-        estimate_key(params, frame.ctx.frustum, (light.center_f32, light.radius_f32), &mut key);
+        key.key(&frame.ctx.gbuffer_key).key(&shadow_map::centre_map_key(&frame.ctx, &params.shadow, &projection)).key(&mask_key);
+        estimate_key(params, &projection, (light.center_f32, light.radius_f32), &mut key);
         let estimate = frame.cached(ESTIMATION.name, key.finish(), |frame| {
             let estimate = PvmfEstimate {
                 raw: frame.ctx.screen_texture("pvmf::visibility_raw"),
@@ -282,7 +282,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             };
             frame.pass("estimation", |ctx, encoder, ts| {
                 encoder.clear_buffer(&estimate.counters, 0, None);
-                let (test, settings) = estimate_uniforms(params, ctx.frustum, (light.center_f32, light.radius_f32));
+                let (test, settings) = estimate_uniforms(params, &projection, (light.center_f32, light.radius_f32));
                 let test = ctx.parameters("pvmf::test_uniforms", &test);
                 let settings = ctx.parameters("pvmf::settings", &settings);
                 let resources = [
@@ -322,7 +322,7 @@ impl Method for PenumbraVolumeMaskFiltering {
         frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
         frame.stat("silhouette_cache_hits", if fresh_mask { mask.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counters, &COUNTERS);
-        frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth));
+        frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth, projection.far()));
         frame.intermediate(Intermediate::color("pvmf_edge_distance", &mask.edge_distance, 1));
         frame.intermediate(Intermediate::color("pvmf_visibility_raw", &estimate.raw, 1));
         frame.intermediate(Intermediate::color("pvmf_blur_mask", &estimate.blur_mask, 1));
@@ -333,11 +333,11 @@ impl Method for PenumbraVolumeMaskFiltering {
 
 impl PenumbraVolumeMaskFiltering {
     /// Pass 2: builds and renders the penumbra volume mask (5.1).
-    fn record_mask(&self, frame: &mut Frame<'_>, params: &PvmfParams) -> Result<PvmfMask> {
+    fn record_mask(&self, frame: &mut Frame<'_>, params: &PvmfParams, projection: &LightProjection) -> Result<PvmfMask> {
         let map = params.shadow.map_size;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
         // d_e = 0 (the clear value) marks texels without a volume.
-        let edge_distance = frame.ctx.texture("pvmf::edge_distance", (map, map), DISTANCE_FORMAT, usage);
+        let edge_distance = frame.ctx.light_texture("pvmf::edge_distance", map, projection.layers(), DISTANCE_FORMAT, usage);
         // The CPU work (silhouettes and volumes) is part of the pass's time.
         let (mask_depth, stats, silhouette_cache_hits) = frame.pass("mask", |ctx, encoder, ts| -> Result<_> {
             let (l, r) = (ctx.light.center, ctx.light.radius);
@@ -347,13 +347,13 @@ impl PenumbraVolumeMaskFiltering {
                 let (edges, hits) = ctx.shared.silhouettes.edges(ctx.prepared, l, params.open_edges)?;
                 cache_hits = hits;
                 // Beyond the far plane from any moved point (they lie between l and the edges).
-                let reach = 4.0 * ctx.frustum.far as f64 + 4.0 * r;
+                let reach = 4.0 * projection.far() as f64 + 4.0 * r;
                 (vertices, stats) = mask_volumes(&edges, l, r, params.s_e, params.offsets, reach);
             }
             // The moved points lie between the light and the edges, nearer than
             // the scene's near plane: clip only what is (almost) at the light.
-            let mask_frustum = ctx.frustum.with_near(ctx.frustum.far * 1e-4);
-            let depth = self.mask_pass.record(ctx, encoder, &mask_frustum, &vertices, map, &[&edge_distance], ts)?;
+            let mask_projection = projection.with_near(projection.far() * 1e-4);
+            let depth = self.mask_pass.record(ctx, encoder, &mask_projection, &vertices, map, &[&edge_distance], ts)?;
             Ok((depth, stats, cache_hits))
         })??;
         Ok(PvmfMask { mask_depth, edge_distance, stats, silhouette_cache_hits })

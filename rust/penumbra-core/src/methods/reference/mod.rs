@@ -30,7 +30,8 @@ use crate::error::Result;
 use crate::frame::Frame;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
-use crate::light_frustum::LightFrustum;
+use crate::gpu::pool::PooledTexture;
+use crate::light_frustum::LightProjection;
 use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
@@ -263,7 +264,7 @@ impl Method for ReferenceShadows {
             "reference::pass",
             crate::shaders::compose("methods/reference/visibility.wgsl"),
             &[
-                layout::depth_texture,
+                layout::depth_array,
                 layout::parameters,
                 layout::storage_buffer_rw,
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
@@ -279,7 +280,7 @@ impl Method for ReferenceShadows {
     fn record(&self, frame: &mut Frame<'_>, params: &ReferenceParams) -> Result<MethodOutput> {
         params.shadow.check_limits(frame.ctx.max_texture_side())?;
         let visibility = frame.ctx.screen_texture("reference::visibility");
-        let used = frame.pass("light_samples", |ctx, encoder, timestamps| -> Result<usize> {
+        let used = frame.pass("light_samples", |ctx, encoder, timestamps| -> Result<(usize, usize, usize)> {
             let (center, radius) = (ctx.light.center, ctx.light.radius);
             let scene = ctx.prepared;
             let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
@@ -306,18 +307,22 @@ impl Method for ReferenceShadows {
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             );
             encoder.clear_buffer(&accumulated, 0, None);
-            let map = ShadowMapPass::create_map(ctx, params.shadow.map_size);
             let depth = params.shadow.bias.map_depth();
-            // Every sample's frustum and parameter blocks, in two buffers
-            // bound at one aligned block per sample.
-            let frusta = samples.iter().map(|s| LightFrustum::fit(s.position.as_vec3(), points.iter().copied())).collect::<Result<Vec<_>>>()?;
+            // Every sample's projection (its own fitted frustum, or cube faces
+            // where one frustum cannot cover the scene from it) and parameter
+            // blocks, in two buffers bound at one aligned block per sample.
+            let corners = ctx.corner_positions();
+            let projections = samples
+                .iter()
+                .map(|s| LightProjection::fit(s.position.as_vec3(), &points, corners, params.shadow.projection))
+                .collect::<Result<Vec<_>>>()?;
             let align = ctx.device.limits().min_storage_buffer_offset_alignment as usize;
             let stride = |size: usize| size.div_ceil(align) * align;
             let (test_stride, weight_stride) = (stride(std::mem::size_of::<ShadowTestUniform>()), stride(std::mem::size_of::<SampleWeightUniform>()));
             let mut tests = vec![0u8; test_stride * samples.len()];
             let mut weights = vec![0u8; weight_stride * samples.len()];
-            for (i, (sample, frustum)) in samples.iter().zip(&frusta).enumerate() {
-                let mut test = params.shadow.uniform(frustum, sample.position.as_vec3().to_array(), 0.0, 0);
+            for (i, (sample, projection)) in samples.iter().zip(&projections).enumerate() {
+                let mut test = params.shadow.uniform(projection, sample.position.as_vec3().to_array(), 0.0, 0);
                 test.set_center_w(sample.weight as f32);
                 let normal = sample.normal.unwrap_or(DVec3::ZERO).as_vec3();
                 let weight = SampleWeightUniform {
@@ -332,13 +337,22 @@ impl Method for ReferenceShadows {
             let weight_buffer = ctx.buffer("reference::sample_weights", weights.len() as u64, usage);
             ctx.queue.write_buffer(&test_buffer, 0, &tests);
             ctx.queue.write_buffer(&weight_buffer, 0, &weights);
+            // One map per layer count, reused sample after sample.
+            let mut maps: Vec<(u32, PooledTexture)> = Vec::new();
+            let mut faces = 0;
             let last = samples.len() - 1;
-            for (i, frustum) in frusta.iter().enumerate() {
-                ctx.shared.shadow_map.record(ctx, encoder, &map, frustum, depth, timestamps, (i == 0, false));
+            for (i, projection) in projections.iter().enumerate() {
+                let layers = projection.layers();
+                if !maps.iter().any(|(l, _)| *l == layers) {
+                    maps.push((layers, ShadowMapPass::create_map(ctx, params.shadow.map_size, layers)));
+                }
+                let map = &maps.iter().find(|(l, _)| *l == layers).expect("made above").1;
+                faces += projection.active_faces() as usize;
+                ctx.shared.shadow_map.record(ctx, encoder, map, projection, depth, timestamps, (i == 0, false));
                 let bind_group = self.pass.bind_group(
                     ctx,
                     &[
-                        Binding::Texture(&map),
+                        Binding::Texture(map),
                         Binding::BufferRange(&test_buffer, (i * test_stride) as u64, std::mem::size_of::<ShadowTestUniform>() as u64),
                         Binding::Buffer(&accumulated),
                         Binding::Texture(&visibility),
@@ -350,10 +364,13 @@ impl Method for ReferenceShadows {
                     self.pass.dispatch(ctx, encoder, "resolve", &bind_group, timestamps.and_then(|t| t.compute_part(false, true)));
                 }
             }
-            Ok(samples.len())
+            Ok((samples.len(), faces, projections.iter().filter(|p| p.is_cube()).count()))
         })??;
+        let (used, faces, cubes) = used;
         frame.stat("light_samples", used as i64);
         frame.stat("shadow_maps_rendered", used as i64);
+        frame.stat("shadow_map_faces", faces as i64);
+        frame.stat("cube_maps", cubes as i64);
         frame.stat("map_size", params.shadow.map_size as i64);
         Ok(MethodOutput { visibility })
     }

@@ -6,7 +6,7 @@
 // `accumulate` adds one sample's shadow-map test and its weight to a
 // per-pixel accumulation buffer; `resolve` writes their ratio as visibility.
 
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 // The shadow test from one light sample; center.xyz = the sample, center.w =
 // its weight: 1/n (equal weights), or the inverse of its sampling density.
 @group(0) @binding(3) var<storage, read> sample_test: ShadowTest;
