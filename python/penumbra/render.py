@@ -9,10 +9,13 @@ from typing import Any
 import numpy as np
 
 from penumbra import _core
-from penumbra.errors import CameraError, ParameterError, SceneError
+from penumbra.errors import CameraError, ParameterError, PenumbraIOError, SceneError
 from penumbra.scene import Camera, Scene
 
-__all__ = ["Renderer", "RenderResult", "adapter_info", "write_image", "methods"]
+__all__ = ["Renderer", "RenderResult", "adapter_info", "write_image", "methods", "IMAGES"]
+
+#: The images every render returns, whatever the method (intermediates add more).
+IMAGES = ("radiance", "visibility", "depth", "normal", "position", "object_id")
 
 
 def adapter_info() -> dict[str, Any]:
@@ -28,15 +31,34 @@ def methods(implemented_only: bool = True) -> list[str]:
     return [name for name, done in _core.methods() if done or not implemented_only]
 
 
-def write_image(path: str | os.PathLike[str], image: np.ndarray) -> None:
+def write_image(path: str | bytes | os.PathLike[str] | os.PathLike[bytes], image: np.ndarray) -> None:
     """Writes a linear float image (H, W) or (H, W, 3) by extension: ``.png``
-    sRGB-encoded 8-bit, ``.exr`` linear float, ``.npy`` the array as is."""
-    path = os.fspath(path)
-    array = np.asarray(image)
+    sRGB-encoded 8-bit, ``.exr`` linear float, ``.npy`` the array as is.
+
+    Raises :class:`~penumbra.errors.ParameterError` for a path that is not a
+    path, a non-numeric image, a wrong shape or extension, and NaN or
+    infinity in a PNG or EXR; :class:`~penumbra.errors.PenumbraIOError` when
+    the file cannot be written."""
+    try:
+        path = os.fsdecode(path)
+    except TypeError:
+        raise ParameterError(f"path must be a str or os.PathLike, got {type(path).__name__}") from None
+    try:
+        array = np.asarray(image)
+    except (TypeError, ValueError) as e:
+        raise ParameterError(f"image must be a numeric array: {e}") from None
+    if array.dtype.kind not in "biuf":
+        raise ParameterError(f"image must be a numeric array, got dtype {array.dtype}")
     if path.lower().endswith(".npy"):
-        np.save(path, array)
+        try:
+            np.save(path, array)
+        except OSError as e:
+            raise PenumbraIOError(f"writing {path}: {e.strerror or e}") from None
         return
-    _core.write_image(path, np.ascontiguousarray(array, dtype=np.float32))
+    with np.errstate(over="ignore"):
+        # Beyond float32's range becomes inf, which the core then refuses.
+        data = np.ascontiguousarray(array, dtype=np.float32)
+    _core.write_image(path, data)
 
 
 @dataclass
@@ -123,7 +145,10 @@ class Renderer:
     """
 
     def __init__(self, timing: str = "auto", pass_cache: bool = True) -> None:
-        self._core = _core.Renderer(timing, bool(pass_cache))
+        if not isinstance(timing, str):
+            raise ParameterError(f"timing must be 'auto' or 'cpu', got {timing!r}")
+        # The core parses the mode and refuses a pass_cache that is not a bool.
+        self._core = _core.Renderer(timing, pass_cache)
 
     @property
     def pass_cache(self) -> bool:
@@ -162,7 +187,7 @@ class Renderer:
         returns the method's intermediate images (e.g. ``shadow_map``)."""
         if not isinstance(scene, Scene):
             raise SceneError(f"expected a penumbra.Scene, got {type(scene).__name__}")
-        scene.check()
+        core_scene = scene._core_value()
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {method!r}")
         camera = camera or scene.camera
@@ -170,13 +195,6 @@ class Renderer:
             raise CameraError("the scene has no camera; pass camera=penumbra.Camera(...)")
         if not isinstance(camera, Camera):
             raise CameraError(f"camera must be a penumbra.Camera, got {type(camera).__name__}")
-        out = self._core.render(
-            [m._core_args(i) for i, m in enumerate(scene.meshes)],
-            scene.light._core_args(),
-            camera._core_args(),
-            np.asarray(scene.ambient, dtype=np.float32),
-            method,
-            params,
-            bool(intermediates),
-        )
+        # intermediates goes as is: the core refuses anything but a bool.
+        out = self._core.render(core_scene, camera._core_value(), method, params, intermediates)
         return RenderResult(**out)

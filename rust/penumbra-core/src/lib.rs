@@ -15,7 +15,7 @@ pub mod silhouettes;
 pub mod topology;
 
 pub use error::{Error, Result};
-pub use gpu::{adapter_summary, AdapterSummary, TimingSource, Timings};
+pub use gpu::{adapter_summary, AdapterSummary, TimingMode, TimingSource, Timings};
 pub use methods::{MethodConfig, ParamValue, METHODS};
 pub use renderer::{Image, ImageData, RenderOptions, RenderResult, Renderer};
 pub use scene::{Camera, Mesh, Scene, SphereLight};

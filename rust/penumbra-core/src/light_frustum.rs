@@ -26,24 +26,97 @@ pub struct LightFrustum {
     pub far: f32,
 }
 
+/// Why no frustum fits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Unfit {
+    NoGeometry,
+    /// The directions to the vertices cancel out: geometry on every side.
+    EverySide,
+    /// A vertex lies this many degrees off the best axis.
+    TooWide(f32),
+}
+
+impl Unfit {
+    fn error(self) -> Error {
+        Error::InvalidScene(match self {
+            Unfit::NoGeometry => "has no geometry to fit a shadow map to".into(),
+            Unfit::EverySide => format!(
+                "geometry surrounds the light: the directions from the light's centre to the \
+                 vertices cancel out (geometry on every side), so no frustum of \
+                 {MAX_HALF_ANGLE_DEGREES} degrees half-angle covers it (omnidirectional shadow \
+                 maps are not supported yet; move the light outside the geometry's bounding region)"
+            ),
+            Unfit::TooWide(angle) => format!(
+                "geometry surrounds the light: a vertex lies {angle:.1} degrees off the shadow-map \
+                 axis, beyond the {MAX_HALF_ANGLE_DEGREES} degrees one frustum covers \
+                 (omnidirectional shadow maps are not supported yet; move the light outside the \
+                 geometry's bounding region)"
+            ),
+        })
+    }
+
+    /// The error from one of `count` samples on the light's sphere: which
+    /// sample, and what to do. The light's centre may see the geometry within
+    /// one frustum where a sample on the light's surface does not.
+    fn sample_error(self, method: &str, sample: usize, count: usize, position: Vec3) -> Error {
+        let sees = match self {
+            Unfit::NoGeometry => return self.error(),
+            Unfit::EverySide => "sees geometry on every side".to_owned(),
+            Unfit::TooWide(angle) => format!("sees a vertex {angle:.1} degrees off its shadow-map axis"),
+        };
+        Error::InvalidScene(format!(
+            "method '{method}': light sample {sample} of {count} (at {:?}, on the light's sphere) \
+             {sees}, beyond the {MAX_HALF_ANGLE_DEGREES} degrees one shadow-map frustum covers; \
+             the light's centre sees the geometry within one frustum, so the other methods render \
+             this scene. Until omnidirectional shadow maps exist: raise the light further above \
+             the geometry, shrink its radius, or narrow the geometry around it",
+            position.to_array()
+        ))
+    }
+}
+
 impl LightFrustum {
     /// Fits a frustum from `center` around all `points`.
     pub fn fit(center: Vec3, points: impl Iterator<Item = Vec3> + Clone) -> Result<Self> {
+        Self::try_fit(center, points).map_err(Unfit::error)
+    }
+
+    /// [`LightFrustum::fit`] from sample `sample` (1-based) of `count` on the
+    /// light's sphere (the `reference` method's), whose error says which
+    /// sample and what to do.
+    pub fn fit_light_sample(
+        position: Vec3,
+        points: impl Iterator<Item = Vec3> + Clone,
+        method: &str,
+        sample: usize,
+        count: usize,
+    ) -> Result<Self> {
+        Self::try_fit(position, points).map_err(|u| u.sample_error(method, sample, count, position))
+    }
+
+    fn try_fit(center: Vec3, points: impl Iterator<Item = Vec3> + Clone) -> Result<Self, Unfit> {
         // Aim at the mean direction to the geometry, then re-aim once at the
         // centre of the projected window so the window is roughly symmetric.
         let mut sum = Vec3::ZERO;
         let mut count = 0usize;
         for p in points.clone() {
-            // Normalisation is safe: the scene check keeps every surface off the light.
-            sum += (p - center).normalize_or_zero();
+            // Normalisation is safe: the scene check keeps every surface off the
+            // light. Dividing by the largest component first keeps the squared
+            // length in [1, 3] at any scale (in a scene 1e-25 across it would
+            // underflow to 0, in one 1e19 across overflow).
+            let d = p - center;
+            let m = d.abs().max_element();
+            if m > 0.0 {
+                sum += (d / m).normalize_or_zero();
+            }
             count += 1;
         }
         if count == 0 {
-            return Err(Error::InvalidScene("has no geometry to fit a shadow map to".into()));
+            return Err(Unfit::NoGeometry);
         }
         let mut axis = sum.normalize_or_zero();
         if axis == Vec3::ZERO || sum.length() < 1e-3 * count as f32 {
-            return Err(surrounds_error(180.0));
+            return Err(Unfit::EverySide);
         }
         let mut fitted = Self::fit_along(center, axis, points.clone())?;
         let w = fitted.window;
@@ -58,7 +131,7 @@ impl LightFrustum {
         Ok(fitted)
     }
 
-    fn fit_along(center: Vec3, axis: Vec3, points: impl Iterator<Item = Vec3>) -> Result<Self> {
+    fn fit_along(center: Vec3, axis: Vec3, points: impl Iterator<Item = Vec3>) -> Result<Self, Unfit> {
         // Any up vector not parallel to the axis gives a valid basis.
         let up = if axis.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
         let view = glam::camera::rh::view::look_to_mat4(center, axis, up);
@@ -72,7 +145,7 @@ impl LightFrustum {
             // z <= 0 is behind the light; |u| or |v| > max_tan is too wide for one map.
             if z <= 0.0 || u.abs() > max_tan || v.abs() > max_tan {
                 let angle = q.truncate().length().atan2(z).to_degrees();
-                return Err(surrounds_error(angle));
+                return Err(Unfit::TooWide(angle));
             }
             x0 = x0.min(u);
             x1 = x1.max(u);
@@ -110,14 +183,6 @@ impl LightFrustum {
         let w = self.window;
         (w.y - w.x).max(w.w - w.z) * z / map_size as f32
     }
-}
-
-fn surrounds_error(angle: f32) -> Error {
-    Error::InvalidScene(format!(
-        "geometry surrounds the light: a vertex lies {angle:.1} degrees off the shadow-map axis, \
-         beyond the {MAX_HALF_ANGLE_DEGREES} degrees one frustum covers (omnidirectional shadow \
-         maps are not supported yet; move the light outside the geometry's bounding region)"
-    ))
 }
 
 /// Perspective projection whose window on the unit-depth plane is
@@ -166,5 +231,18 @@ mod tests {
         let points = plane_points();
         let err = LightFrustum::fit(Vec3::new(0.0, 0.5, 0.0), points.iter().copied()).unwrap_err();
         assert!(err.to_string().contains("surrounds the light"), "{err}");
+        // A light at the centre of a cube's corners: no mean direction at all.
+        let cube: Vec<Vec3> = (0..8).map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, (i >> 2) as f32) * 2.0 - 1.0).collect();
+        let err = LightFrustum::fit(Vec3::ZERO, cube.iter().copied()).unwrap_err().to_string();
+        assert!(err.contains("every side") && !err.contains("180"), "{err}");
+    }
+
+    #[test]
+    fn a_light_sample_error_names_the_sample_and_the_remedy() {
+        let points = plane_points();
+        let err = LightFrustum::fit_light_sample(Vec3::new(0.0, 0.5, 0.0), points.iter().copied(), "reference", 3, 16)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("light sample 3 of 16") && err.contains("degrees off") && err.contains("shrink its radius"), "{err}");
     }
 }

@@ -29,6 +29,22 @@ pub enum ParamValue {
     Str(String),
 }
 
+/// As Python writes the value (`True`, `256`, `256.0`, `'abc'`): the form
+/// the caller typed, for messages.
+impl std::fmt::Display for ParamValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ParamValue::Bool(b) => f.write_str(if *b { "True" } else { "False" }),
+            ParamValue::Int(i) => write!(f, "{i}"),
+            ParamValue::Float(x) if !x.is_finite() => write!(f, "{x}"),
+            ParamValue::Float(x) if *x != 0.0 && !(1e-4..1e16).contains(&x.abs()) => write!(f, "{x:e}"),
+            ParamValue::Float(x) if x.fract() == 0.0 => write!(f, "{x:.1}"),
+            ParamValue::Float(x) => write!(f, "{x}"),
+            ParamValue::Str(s) => write!(f, "'{}'", s.replace('\\', "\\\\").replace('\'', "\\'")),
+        }
+    }
+}
+
 impl ParamValue {
     fn type_name(&self) -> &'static str {
         match self {
@@ -140,7 +156,7 @@ impl<'a> ParamReader<'a> {
 
     fn wrong_type(&self, name: &str, expected: &str, got: &ParamValue) -> Error {
         Error::InvalidParameter(format!(
-            "parameter '{name}' of method '{}' must be {expected}, got {} {got:?}",
+            "parameter '{name}' of method '{}' must be {expected}, got {} {got}",
             self.method,
             got.type_name()
         ))

@@ -321,7 +321,7 @@ impl ReferenceShadows {
         let last = samples.len() - 1;
         for (i, sample) in samples.iter().enumerate() {
             let s = sample.position;
-            let frustum = LightFrustum::fit(s.as_vec3(), points.iter().copied())?;
+            let frustum = LightFrustum::fit_light_sample(s.as_vec3(), points.iter().copied(), "reference", i + 1, samples.len())?;
             let first = i == 0;
             shadow_pass.record_part(device, encoder, &map, &frustum, depth, vertices, timestamps, (first, false));
             let mut test = params.shadow.uniform(&frustum, s.as_vec3().to_array(), 0.0, 0);
