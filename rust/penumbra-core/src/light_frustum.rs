@@ -61,15 +61,16 @@ impl Unfit {
     fn sample_error(self, method: &str, sample: usize, count: usize, position: Vec3) -> Error {
         let sees = match self {
             Unfit::NoGeometry => return self.error(),
-            Unfit::EverySide => "sees geometry on every side".to_owned(),
-            Unfit::TooWide(angle) => format!("sees a vertex {angle:.1} degrees off its shadow-map axis"),
+            Unfit::EverySide => "geometry on every side".to_owned(),
+            Unfit::TooWide(angle) => format!("a vertex {angle:.1} degrees off its shadow-map axis"),
         };
         Error::InvalidScene(format!(
-            "method '{method}': light sample {sample} of {count} (at {:?}, on the light's sphere) \
-             {sees}, beyond the {MAX_HALF_ANGLE_DEGREES} degrees one shadow-map frustum covers; \
-             the light's centre sees the geometry within one frustum, so the other methods render \
-             this scene. Until omnidirectional shadow maps exist: raise the light further above \
-             the geometry, shrink its radius, or narrow the geometry around it",
+            "method '{method}': geometry surrounds the light as its light sample {sample} of \
+             {count} sees it (at {:?}, on the light's sphere): {sees}, beyond the \
+             {MAX_HALF_ANGLE_DEGREES} degrees one shadow-map frustum covers. The light's centre \
+             sees the geometry within one frustum, so the other methods render this scene; until \
+             omnidirectional shadow maps exist, raise the light further above the geometry, \
+             shrink its radius, or narrow the geometry around it",
             position.to_array()
         ))
     }

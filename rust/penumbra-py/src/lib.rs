@@ -71,7 +71,7 @@ where
 fn strict_bool(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<bool> {
     let type_name = obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
     if obj.is_instance_of::<PyBool>() || type_name == "bool" || type_name == "bool_" {
-        return extract(obj, |m| ParameterError::new_err(m), what);
+        return extract(obj, ParameterError::new_err, what);
     }
     Err(ParameterError::new_err(format!("{what} must be True or False, got {type_name} {}", repr(obj))))
 }
@@ -136,9 +136,9 @@ struct CoreCamera<'py> {
 }
 
 fn mesh(index: usize, obj: &Bound<'_, PyAny>) -> PyResult<core::Mesh> {
-    let m: CoreMesh<'_> = extract(obj, |s| MeshError::new_err(s), &format!("meshes[{index}]"))?;
+    let m: CoreMesh<'_> = extract(obj, MeshError::new_err, &format!("meshes[{index}]"))?;
     let name = m.name;
-    let mesh_error = |s: String| MeshError::new_err(s);
+    let mesh_error: ErrorClass = MeshError::new_err;
     let t = m.transform.as_array();
     if t.shape() != [4, 4] {
         return Err(mesh_error(format!("mesh '{name}': transform must have shape (4, 4), got {:?}", t.shape())));
@@ -161,9 +161,9 @@ fn mesh(index: usize, obj: &Bound<'_, PyAny>) -> PyResult<core::Mesh> {
 }
 
 fn scene(obj: &Bound<'_, PyAny>) -> PyResult<core::Scene> {
-    let s: CoreScene<'_> = extract(obj, |m| SceneError::new_err(m), "scene")?;
-    let light: CoreLight<'_> = extract(&s.light, |m| LightError::new_err(m), "light")?;
-    let light_error = |m: String| LightError::new_err(m);
+    let s: CoreScene<'_> = extract(obj, SceneError::new_err, "scene")?;
+    let light: CoreLight<'_> = extract(&s.light, LightError::new_err, "light")?;
+    let light_error: ErrorClass = LightError::new_err;
     Ok(core::Scene {
         meshes: s.meshes.iter().enumerate().map(|(i, m)| mesh(i, m)).collect::<PyResult<_>>()?,
         light: core::SphereLight {
@@ -171,13 +171,13 @@ fn scene(obj: &Bound<'_, PyAny>) -> PyResult<core::Scene> {
             radius: light.radius,
             intensity: vec3(light_error, "light intensity", &light.intensity)?,
         },
-        ambient: vec3(|m| SceneError::new_err(m), "ambient", &s.ambient)?,
+        ambient: vec3(SceneError::new_err, "ambient", &s.ambient)?,
     })
 }
 
 fn camera(obj: &Bound<'_, PyAny>) -> PyResult<core::Camera> {
-    let c: CoreCamera<'_> = extract(obj, |m| CameraError::new_err(m), "camera")?;
-    let camera_error = |m: String| CameraError::new_err(m);
+    let c: CoreCamera<'_> = extract(obj, CameraError::new_err, "camera")?;
+    let camera_error: ErrorClass = CameraError::new_err;
     Ok(core::Camera {
         eye: vec3(camera_error, "camera eye", &c.eye)?,
         target: vec3(camera_error, "camera target", &c.target)?,
@@ -189,7 +189,7 @@ fn camera(obj: &Bound<'_, PyAny>) -> PyResult<core::Camera> {
 }
 
 fn param_value(name: &str, v: &Bound<'_, PyAny>) -> PyResult<core::ParamValue> {
-    let parameter_error = |m: String| ParameterError::new_err(m);
+    let parameter_error: ErrorClass = ParameterError::new_err;
     let what = format!("parameter '{name}'");
     if v.is_instance_of::<PyBool>() {
         return Ok(core::ParamValue::Bool(extract(v, parameter_error, &what)?));
@@ -321,7 +321,7 @@ impl Renderer {
         params: &Bound<'py, PyAny>,
         intermediates: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let parameter_error = |m: String| ParameterError::new_err(m);
+        let parameter_error: ErrorClass = ParameterError::new_err;
         let scene = self::scene(scene)?;
         let camera = self::camera(camera)?;
         let method: String = extract(method, parameter_error, "method")?;
@@ -385,7 +385,7 @@ fn methods(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
 /// Writes a linear float32 image, (H, W) or (H, W, 3): `.png` as sRGB 8-bit, `.exr` linear.
 #[pyfunction]
 fn write_image(py: Python<'_>, path: &Bound<'_, PyAny>, image: &Bound<'_, PyAny>) -> PyResult<()> {
-    let parameter_error = |m: String| ParameterError::new_err(m);
+    let parameter_error: ErrorClass = ParameterError::new_err;
     let path: PathBuf = extract(path, parameter_error, "path (a str or os.PathLike)")?;
     let image: PyReadonlyArrayDyn<'_, f32> = extract(image, parameter_error, "image (a float32 numpy array)")?;
     let shape = image.shape().to_vec();
