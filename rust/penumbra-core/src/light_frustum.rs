@@ -102,14 +102,17 @@ impl LightFrustum {
         let mut count = 0usize;
         for p in points.clone() {
             // Normalisation is safe: the scene check keeps every surface off the
-            // light. Dividing by the largest component first keeps the squared
-            // length in [1, 3] at any scale (in a scene 1e-25 across it would
-            // underflow to 0, in one 1e19 across overflow).
+            // light. Where the squared length would underflow or overflow
+            // float32 (a scene 1e-25 across, or 1e19), dividing by the largest
+            // component first brings it into [1, 3].
             let d = p - center;
-            let m = d.abs().max_element();
-            if m > 0.0 {
-                sum += (d / m).normalize_or_zero();
-            }
+            let length_squared = d.length_squared();
+            sum += if length_squared.is_normal() && length_squared.is_finite() {
+                d.normalize_or_zero()
+            } else {
+                let m = d.abs().max_element();
+                if m > 0.0 { (d / m).normalize_or_zero() } else { Vec3::ZERO }
+            };
             count += 1;
         }
         if count == 0 {
