@@ -151,7 +151,7 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("radiance_and_intensity", lambda r: penumbra.SphereLight((0, 3, 0), 1.0, radiance=1, intensity=1), LightError, ["exactly one"]),
     ("light_intersects_mesh", render(light=penumbra.SphereLight((0, 0.2, 0), 0.3, intensity=1)), SceneError, ["intersects mesh 'quad'"]),
     ("point_light_on_surface", render(light=penumbra.SphereLight((0.5, 0, 0.5), 0.0, intensity=1)), SceneError, ["intersects"]),
-    ("geometry_surrounds_light", render([ground_plane(), sphere((0, 1, 0), 0.5)], light=penumbra.SphereLight((0, 0.3, 0), 0.1, intensity=1)), SceneError, ["surrounds the light"]),
+    ("geometry_surrounds_light_one_frustum", render([ground_plane(), sphere((0, 1, 0), 0.5)], light=penumbra.SphereLight((0, 0.3, 0), 0.1, intensity=1), projection="frustum"), SceneError, ["surrounds the light", "projection='auto'"]),
     # Cameras and images
     ("zero_width", lambda r: CAMERA.with_size(0, 32), CameraError, ["at least 1x1", "0x32"]),
     ("zero_height", lambda r: CAMERA.with_size(32, 0), CameraError, ["0"]),
@@ -210,7 +210,8 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("intensity_nan", render(light=penumbra.SphereLight((0, 3, 0), 0.3, intensity=(1, np.nan, 1))), LightError, ["intensity", "finite"]),
     ("radiance_overflows_intensity", render(light=penumbra.SphereLight((0, 1e19, 0), 1e18, radiance=1e30)), LightError, ["intensity", "finite"]),
     ("huge_radius_swallows_scene", render(light=penumbra.SphereLight((0, 3, 0), 1e6, intensity=1)), SceneError, ["intersects mesh 'quad'"]),
-    ("light_inside_closed_box", render([box((0, 1, 0), (2, 2, 2), name="room")], light=penumbra.SphereLight((0, 1, 0), 0.2, intensity=1), method="pvm"), SceneError, ["surrounds the light"]),
+    ("light_inside_closed_box_one_frustum", render([box((0, 1, 0), (2, 2, 2), name="room")], light=penumbra.SphereLight((0, 1, 0), 0.2, intensity=1), method="pvm", projection="frustum"), SceneError, ["surrounds the light"]),
+    ("projection_unknown", render(projection="sphere"), ParameterError, ["projection", "'auto', 'frustum', 'cube'"]),
     ("fov_negative", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=-10, width=8, height=8)), CameraError, ["fov_y"]),
     ("fov_nan", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=float("nan"), width=8, height=8)), CameraError, ["fov_y"]),
     ("fov_string", lambda r: penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y="wide"), CameraError, ["fov_y", "real number"]),
@@ -251,8 +252,9 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("light_beyond_range", render(light=penumbra.SphereLight((0, 3e18, 0), 0.3, intensity=1)), LightError, ["supported range"]),
     ("camera_beyond_range", render(camera=penumbra.Camera((0, 4e18, 6), (0, 0, 0), width=8, height=8)), CameraError, ["eye", "supported range"]),
     ("scene_below_smallest_extent", render([quad(transform=np.diag([1e-20, 1e-20, 1e-20, 1]))], light=penumbra.SphereLight((0, 1e-19, 0), 0.0, intensity=1e-40)), SceneError, ["spans only", "scale the scene up"]),
-    # Item 6: reference's refusal says which sample and what to do.
-    ("reference_sample_outside_one_frustum", render([ground_slab()], light=penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), method="reference", n_samples=16, map_size=256), SceneError, ["method 'reference'", "light sample", " of ", "degrees off", "raise the light", "shrink its radius"]),
+    # Item 6: reference's refusal (with one frustum per sample, as every method's was before
+    # cube maps) says which sample and what to do.
+    ("reference_sample_outside_one_frustum", render([ground_slab()], light=penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), method="reference", n_samples=16, map_size=256, projection="frustum"), SceneError, ["method 'reference'", "light sample", " of ", "degrees off", "projection='auto'", "smaller radius"]),
     # Item 8: light attributes replaced after construction are checked again.
     ("light_center_replaced_none", lambda r: r.render(light_replaced(center=None)), LightError, ["light center", "numeric"]),
     ("light_intensity_replaced_shape", lambda r: r.render(light_replaced(intensity=[1, 2])), LightError, ["light intensity", "shape (3)"]),
@@ -277,8 +279,9 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("param_str_for_int", render(map_size="abc"), ParameterError, ["map_size", "got str 'abc'"]),
     ("param_float_for_int", render(map_size=256.0), ParameterError, ["map_size", "got float 256.0"]),
     ("param_bool_for_float", render(normal_offset=True), ParameterError, ["normal_offset", "got bool True"]),
-    ("param_int_beyond_int64", render(method="pcf", seed=2**63), ParameterError, ["seed", "integer 9223372036854775808", "64-bit"]),
-    ("param_uint64_beyond_int64", render(method="pcf", seed=np.uint64(2**64 - 1)), ParameterError, ["seed", "integer 18446744073709551615"]),
+    ("param_int_beyond_int64", render(method="pcf", seed=2**63), ParameterError, ["seed", "an integer in [0, 4294967295]", "got int 9223372036854775808"]),
+    ("param_uint64_beyond_int64", render(method="pcf", seed=np.uint64(2**64 - 1)), ParameterError, ["seed", "got int 18446744073709551615"]),
+    ("param_float_param_given_huge_int", render(method="pcf", kernel=2**70), ParameterError, ["kernel", "a number in", "got int 1180591620717411303424"]),
     # Item 12: accepted silently before.
     ("intermediates_string", render(intermediates="no"), ParameterError, ["intermediates", "True or False", "'no'"]),
     ("intermediates_int", render(intermediates=1), ParameterError, ["intermediates", "True or False"]),
@@ -367,6 +370,7 @@ def test_write_image_takes_bytes_paths(tmp_path: Path) -> None:
         (lambda core, r: r._core.render(core_scene(), CAMERA._core_value(), 5, {}), ParameterError, ["method"]),
         (lambda core, r: r._core.render(core_scene(), CAMERA._core_value(), "hard", [("map_size", 256)]), ParameterError, ["params must be a dict"]),
         (lambda core, r: r._core.render(core_scene(), CAMERA._core_value(), "hard", {1: 256}), ParameterError, ["parameter name"]),
+        (lambda core, r: r._core.render(core_scene(), CAMERA._core_value(), "pcf", {"seed": 2**63}), ParameterError, ["seed", "integer 9223372036854775808", "64-bit"]),
         (lambda core, r: core.write_image(None, np.zeros((2, 2), np.float32)), ParameterError, ["path"]),
         (lambda core, r: core.write_image("a.png", np.zeros((2, 2), np.float64)), ParameterError, ["image", "float32"]),
     ],
@@ -401,12 +405,13 @@ def test_mesh_file_beyond_float32_warns_nothing(tmp_path: Path) -> None:
 
 
 def test_the_scene_reference_refuses_renders_with_every_other_method(renderer: penumbra.Renderer) -> None:
-    """Item 6: the light's centre sees the slab within one frustum; only
-    reference's samples on the light's sphere do not (its refusal above)."""
+    """Item 6: with one frustum per map, the light's centre sees the slab
+    within it and only reference's samples on the light's sphere do not
+    (its refusal above); each remedy the message names works here."""
     scene = penumbra.Scene([ground_slab()], penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), CAMERA)
     for method in penumbra.methods():
         if method != "reference":
-            renderer.render(scene, method, map_size=256)
-    # Each remedy the message names works here: a smaller radius, a higher light.
-    renderer.render(scene.with_light(scene.light.with_radius(0.1)), "reference", n_samples=16, map_size=256)
-    renderer.render(scene.with_light(penumbra.SphereLight((0, 1.8, 0), 0.3, intensity=10)), "reference", n_samples=16, map_size=256)
+            renderer.render(scene, method, map_size=256, projection="frustum")
+    renderer.render(scene, "reference", n_samples=16, map_size=256)  # projection="auto": cube faces
+    renderer.render(scene.with_light(scene.light.with_radius(0.1)), "reference", n_samples=16, map_size=256, projection="frustum")
+    renderer.render(scene.with_light(penumbra.SphereLight((0, 1.8, 0), 0.3, intensity=10)), "reference", n_samples=16, map_size=256, projection="frustum")

@@ -15,7 +15,7 @@ import trimesh
 
 import penumbra
 from penumbra.scenes import ground_slab
-from stress_scenes import FAST, METHODS, camera, check_images, mesh
+from stress_scenes import FAST, METHODS, VOLUME_METHODS, camera, check_images, mesh
 
 LIGHT = penumbra.SphereLight((0.3, 5.0, 0.2), 0.4, intensity=40.0)
 
@@ -114,7 +114,6 @@ CASES: dict[str, tuple[Callable[[], penumbra.Scene], Error | None]] = {
     "t_junction": (t_junction, (penumbra.MeshError, ["'box_with_t_junction'", "not closed", "boundary edges"])),
     "touching_and_intersecting_casters": (touching_casters, None),
 }
-VOLUME_METHODS = {"pvm", "pvmf"}
 
 
 @pytest.mark.parametrize("method", METHODS)

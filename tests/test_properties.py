@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import HealthCheck, given, reject, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import penumbra
@@ -120,17 +120,9 @@ def scene_specs(draw: st.DrawFn) -> SceneSpec:
 
 
 def render(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str, **extra: object) -> penumbra.RenderResult:
-    """Renders, or rejects the example when the scene is refused for the one
-    documented reason a valid random scene can have: a light near the
-    caster sees the slab beyond the 80-degree half-angle of one shadow-map
-    frustum (a typed SceneError naming it; omnidirectional maps are not
-    implemented)."""
-    try:
-        return renderer.render(scene, method, **{**FAST[method], **extra})
-    except penumbra.SceneError as e:
-        assert "surrounds the light" in str(e), e
-        reject()
-        raise
+    """Renders: every valid random scene renders (a light near the caster
+    that sees the slab beyond one frustum's 80 degrees takes cube faces)."""
+    return renderer.render(scene, method, **{**FAST[method], **extra})
 
 
 CI = settings(max_examples=3, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])

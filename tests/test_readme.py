@@ -24,3 +24,11 @@ def test_readme_python_example_runs(renderer: penumbra.Renderer, tmp_path: Path,
     assert result.radiance.shape == (256, 256, 3) and np.isfinite(result.radiance).all()
     assert {1, 2} <= set(np.unique(result.object_id)), "both casters are in view"
     assert (result.visibility[result.object_id == 0] == 0).any(), "they cast shadows"
+
+
+def test_parameter_page_is_current() -> None:
+    """docs/parameters.md is what the registry declares today."""
+    from penumbra.cli import parameters_markdown
+
+    page = README.parent / "docs" / "parameters.md"
+    assert page.read_text() == parameters_markdown(), "regenerate: python -m penumbra methods --markdown > docs/parameters.md"

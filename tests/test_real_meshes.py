@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import penumbra
-from stress_scenes import FAST, MESHES, METHODS, check_images
+from stress_scenes import FAST, MESHES, METHODS, VOLUME_METHODS, check_images
 
 # mesh file -> (expected error for the volume methods or None, slow)
 # The reasons come from ../shared/meshes/SOURCES.md's topology table.
@@ -29,7 +29,6 @@ EXPECTED: dict[str, tuple[tuple[type[Exception], list[str]] | None, bool]] = {
     # 481 non-manifold edges, 4712 boundary edges.
     "sponza.obj": (NOT_MANIFOLD, True),
 }
-VOLUME_METHODS = {"pvm", "pvmf"}
 
 
 def cases() -> list:

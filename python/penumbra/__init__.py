@@ -23,7 +23,7 @@ from penumbra.errors import (
     PenumbraIOError,
     SceneError,
 )
-from penumbra.render import Renderer, RenderResult, adapter_info, methods, write_image
+from penumbra.render import MethodInfo, Param, Renderer, RenderResult, adapter_info, method_info, methods, write_image
 from penumbra.scene import Camera, Mesh, Scene, SphereLight
 from penumbra.sweep import sweep
 
@@ -38,6 +38,9 @@ __all__ = [
     "RenderResult",
     "adapter_info",
     "methods",
+    "method_info",
+    "MethodInfo",
+    "Param",
     "write_image",
     "Camera",
     "Mesh",

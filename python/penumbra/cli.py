@@ -112,9 +112,47 @@ def build_parser() -> argparse.ArgumentParser:
     bench.build_parser(bench_parser).set_defaults(run=bench.run_from_args)
 
     sub.add_parser("scenes", help="list the built-in scenes").set_defaults(run=lambda a: print("\n".join(scenes.names())) or 0)
-    sub.add_parser("methods", help="list the implemented methods").set_defaults(run=lambda a: print("\n".join(methods())) or 0)
+    listing = sub.add_parser("methods", help="list the implemented methods (with --params, their parameters)")
+    listing.add_argument("--params", action="store_true", help="each method's paper and parameters")
+    listing.add_argument("--markdown", action="store_true", help="the parameter tables of docs/parameters.md")
+    listing.set_defaults(run=_methods)
     sub.add_parser("info", help="show the GPU adapter in use").set_defaults(run=lambda a: print(json.dumps(adapter_info(), indent=2)) or 0)
     return parser
+
+
+def _methods(args: argparse.Namespace) -> int:
+    from penumbra.render import method_info
+
+    if args.markdown:
+        print(parameters_markdown(), end="")
+        return 0
+    for name in methods():
+        if not args.params:
+            print(name)
+            continue
+        info = method_info(name)
+        print(f"{name}: {info.paper}")
+        for p in info.params:
+            print(f"    {p.name} = {p.default!r}: {p.range}; {p.doc}")
+    return 0
+
+
+def parameters_markdown() -> str:
+    """The text of docs/parameters.md: every implemented method's parameters,
+    from the declarations the core checks them against."""
+    from penumbra.render import method_info, parameter_table
+
+    parts = [
+        "# Method parameters",
+        "",
+        "Generated from the core's method registry by `python -m penumbra methods --markdown`",
+        "(`tests/test_readme.py` checks that this page is current). In Python,",
+        "`penumbra.method_info(name)` returns the same declarations.",
+    ]
+    for name in methods():
+        paper = method_info(name).paper
+        parts += ["", f"## `{name}`", "", paper[0].upper() + paper[1:] + ".", "", parameter_table(name)]
+    return "\n".join(parts) + "\n"
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -25,7 +25,20 @@ import trimesh
 from penumbra.errors import MeshError, ParameterError
 from penumbra.scene import Camera, Mesh, Scene, SphereLight
 
-__all__ = ["names", "get", "DEFAULT", "ground_plane", "ground_slab", "sphere", "box", "from_mesh"]
+__all__ = [
+    "names",
+    "get",
+    "DEFAULT",
+    "ground_plane",
+    "ground_slab",
+    "sphere",
+    "box",
+    "from_mesh",
+    "load_mesh",
+    "wide_floor",
+    "cornell_box",
+    "sponza",
+]
 
 DEFAULT = "sphere_on_plane"
 _WIDTH, _HEIGHT = 512, 512
@@ -156,9 +169,9 @@ def _obj_with_relative_indices(path: str) -> trimesh.Trimesh | None:
     return trimesh.Trimesh(np.array(vertices, dtype=np.float64).reshape(-1, 3), np.array(faces, dtype=np.int64).reshape(-1, 3), process=False)
 
 
-def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5) -> Scene:
-    """A scene around a mesh file (anything trimesh reads): the mesh scaled to
-    a 2.5-unit bounding box, resting on the ground plane, with the default light and camera."""
+def load_mesh(path: str) -> trimesh.Trimesh:
+    """The triangles of a mesh file (anything trimesh reads; OBJ files with
+    relative indices read here), as they are in the file."""
     # trimesh merges vertices by casting their coordinates to integers: a
     # coordinate beyond float32's range warns there ("invalid value in cast")
     # and may collapse the mesh. The coordinates are checked, and named,
@@ -182,10 +195,56 @@ def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_ra
     extent = float(np.max(loaded.extents))
     if not math.isfinite(extent) or extent <= 0:
         raise MeshError(f"mesh file {path!r} has a degenerate or non-finite bounding box")
-    scale = 2.5 / extent
-    vertices = (np.asarray(loaded.vertices) - loaded.bounds.mean(axis=0)) * scale
+    return loaded
+
+
+def _resting(path: str, size: float) -> Mesh:
+    """The mesh of `path` scaled to a `size`-unit bounding box, centred on
+    the y axis and resting on y = 0."""
+    loaded = load_mesh(path)
+    vertices = (np.asarray(loaded.vertices) - loaded.bounds.mean(axis=0)) * (size / float(np.max(loaded.extents)))
     vertices[:, 1] -= vertices[:, 1].min() - 1e-3
-    name = str(path).rsplit("/", 1)[-1]
-    mesh = Mesh(vertices, np.asarray(loaded.faces), albedo=0.7, object_id=1, name=name)
+    return Mesh(vertices, np.asarray(loaded.faces), albedo=0.7, object_id=1, name=str(path).rsplit("/", 1)[-1])
+
+
+def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5) -> Scene:
+    """A scene around a mesh file (anything trimesh reads): the mesh scaled to
+    a 2.5-unit bounding box, resting on the ground plane, with the default light and camera."""
+    mesh = _resting(path, 2.5)
     camera = _camera().with_size(width, height)
-    return Scene([ground_slab(), mesh], _light(light_radius), camera, name=name)
+    return Scene([ground_slab(), mesh], _light(light_radius), camera, name=mesh.name)
+
+
+def wide_floor(path: str | None = None, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.3) -> Scene:
+    """A floor eight times wider than the light is high: a 12 x 12 slab under
+    a light 1.5 above it, with a caster between them (the mesh file at
+    ``path`` scaled to a 1-unit box, or a box). One shadow-map frustum would
+    span 80 degrees to the floor's corners: shadow maps take cube faces
+    (``projection="auto"``)."""
+    caster = _resting(path, 1.0) if path is not None else box((0.0, 0.4, 0.0), (0.6, 0.8, 0.6), yaw_degrees=30.0)
+    camera = Camera(eye=(0.0, 3.0, 7.0), target=(0.0, 0.3, 0.0), fov_y=50.0, width=width, height=height)
+    light = SphereLight(center=(0.4, 1.5, 0.3), radius=light_radius, intensity=12.0)
+    return Scene([ground_slab(half_size=6.0), caster], light, camera, name="wide_floor" + (f" ({caster.name})" if path else ""))
+
+
+def cornell_box(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.15) -> Scene:
+    """The Cornell box of ``path`` (``CornellBox-Original.obj``: a 2-unit
+    room, open at the front, with two blocks) lit by a sphere light under its
+    ceiling, seen through the open front. The light is surrounded by
+    geometry: shadow maps take cube faces (``projection="auto"``)."""
+    loaded = load_mesh(path)
+    room = Mesh(np.asarray(loaded.vertices), np.asarray(loaded.faces), albedo=0.7, object_id=1, name="cornell_box")
+    camera = Camera(eye=(0.0, 1.0, 3.4), target=(0.0, 1.0, 0.0), fov_y=40.0, width=width, height=height)
+    light = SphereLight(center=(0.0, 1.65, -0.1), radius=light_radius, intensity=3.0)
+    return Scene([room], light, camera, name="cornell_box")
+
+
+def sponza(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5) -> Scene:
+    """Crytek's Sponza atrium (``sponza.obj``, 66k triangles) lit by a sphere
+    light hanging in the atrium, seen from inside the building (the camera
+    is inside the geometry's bounds). Shadow maps take cube faces."""
+    loaded = load_mesh(path)
+    hall = Mesh(np.asarray(loaded.vertices), np.asarray(loaded.faces), albedo=0.7, object_id=1, name="sponza")
+    camera = Camera(eye=(-10.0, 2.5, 0.5), target=(4.0, 4.0, 0.0), fov_y=60.0, width=width, height=height)
+    light = SphereLight(center=(0.0, 7.0, 0.0), radius=light_radius, intensity=150.0)
+    return Scene([hall], light, camera, name="sponza")

@@ -296,6 +296,23 @@ impl Renderer {
         self.inner.clear_pass_cache();
     }
 
+    /// What the resource pool holds: counts, and bytes in use and free.
+    fn pool_stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.inner.pool_stats();
+        let d = PyDict::new(py);
+        d.set_item("textures", s.textures)?;
+        d.set_item("buffers", s.buffers)?;
+        d.set_item("bind_groups", s.bind_groups)?;
+        d.set_item("bytes_in_use", s.bytes_in_use)?;
+        d.set_item("bytes_free", s.bytes_free)?;
+        Ok(d)
+    }
+
+    /// Releases every pooled GPU resource not in use.
+    fn clear_pool(&self) {
+        self.inner.clear_pool();
+    }
+
     fn adapter_info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         summary_dict(py, self.inner.adapter())
     }
@@ -379,7 +396,49 @@ fn adapter_info(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 /// Every method name of SPEC section 4 with whether it is implemented.
 #[pyfunction]
 fn methods(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
-    PyList::new(py, core::METHODS.iter().map(|(name, done)| (*name, *done)))
+    PyList::new(py, core::methods())
+}
+
+/// Each implemented method's declaration: name, paper and parameters (name,
+/// type, default, range or choices, doc), as the core's registry holds it.
+#[pyfunction]
+fn method_specs(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let out = PyList::empty(py);
+    for entry in core::REGISTRY {
+        let method = PyDict::new(py);
+        method.set_item("name", entry.name)?;
+        method.set_item("paper", entry.paper)?;
+        let params = PyList::empty(py);
+        for spec in (entry.specs)() {
+            let p = PyDict::new(py);
+            p.set_item("name", spec.name)?;
+            p.set_item("default", param_to_py(py, &spec.default)?)?;
+            p.set_item("doc", spec.doc)?;
+            p.set_item("range", spec.range())?;
+            match &spec.kind {
+                core::ParamKind::Bool => p.set_item("type", "bool")?,
+                core::ParamKind::Int { min, max } => {
+                    p.set_item("type", "int")?;
+                    p.set_item("minimum", min)?;
+                    p.set_item("maximum", max)?;
+                }
+                core::ParamKind::Float { min, max, min_exclusive } => {
+                    p.set_item("type", "float")?;
+                    p.set_item("minimum", min)?;
+                    p.set_item("maximum", max)?;
+                    p.set_item("minimum_exclusive", min_exclusive)?;
+                }
+                core::ParamKind::Choice(choices) => {
+                    p.set_item("type", "choice")?;
+                    p.set_item("choices", choices.to_vec())?;
+                }
+            }
+            params.append(p)?;
+        }
+        method.set_item("params", params)?;
+        out.append(method)?;
+    }
+    Ok(out)
 }
 
 /// Writes a linear float32 image, (H, W) or (H, W, 3): `.png` as sRGB 8-bit, `.exr` linear.
@@ -409,7 +468,7 @@ fn write_image(py: Python<'_>, path: &Bound<'_, PyAny>, image: &Bound<'_, PyAny>
 #[pymodule]
 mod _core {
     #[pymodule_export]
-    use super::{adapter_info, methods, write_image, Renderer};
+    use super::{adapter_info, method_specs, methods, write_image, Renderer};
 
     #[pymodule_init]
     fn init(m: &pyo3::Bound<'_, pyo3::types::PyModule>) -> pyo3::PyResult<()> {

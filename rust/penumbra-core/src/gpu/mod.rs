@@ -2,6 +2,7 @@
 
 pub mod context;
 pub mod layout;
+pub mod pool;
 pub mod profiler;
 pub mod readback;
 

@@ -4,6 +4,7 @@
 use std::time::Instant;
 
 use crate::error::{Error, Result};
+use crate::gpu::pool::ResourcePool;
 use crate::gpu::GpuContext;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -102,6 +103,7 @@ impl<'q> PassTimestamps<'q> {
 /// one submission; without, each pass is submitted and waited for alone.
 pub struct Profiler<'c> {
     ctx: &'c GpuContext,
+    pool: &'c ResourcePool,
     encoder: wgpu::CommandEncoder,
     queries: Option<wgpu::QuerySet>,
     names: Vec<String>,
@@ -112,7 +114,7 @@ pub struct Profiler<'c> {
 const MAX_PASSES: u32 = 32;
 
 impl<'c> Profiler<'c> {
-    pub fn new(ctx: &'c GpuContext, use_timestamps: bool) -> Self {
+    pub fn new(ctx: &'c GpuContext, pool: &'c ResourcePool, use_timestamps: bool) -> Self {
         let queries = (use_timestamps && ctx.has_timestamps()).then(|| {
             ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("penumbra::timestamps"),
@@ -122,6 +124,7 @@ impl<'c> Profiler<'c> {
         });
         Self {
             ctx,
+            pool,
             encoder: Self::new_encoder(ctx),
             queries,
             names: Vec::new(),
@@ -193,18 +196,11 @@ impl<'c> Profiler<'c> {
             Some(set) => {
                 let count = 2 * self.names.len() as u32;
                 let bytes = count as u64 * wgpu::QUERY_SIZE as u64;
-                let resolve = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("penumbra::timestamps_resolve"),
-                    size: bytes.max(8),
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                let read = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("penumbra::timestamps_read"),
-                    size: bytes.max(8),
-                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                    mapped_at_creation: false,
-                });
+                let device = &self.ctx.device;
+                let resolve_usage = wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC;
+                let resolve = self.pool.buffer(device, "penumbra::timestamps_resolve", bytes.max(8), resolve_usage);
+                let read_usage = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
+                let read = self.pool.buffer(device, "penumbra::timestamps_read", bytes.max(8), read_usage);
                 if count > 0 {
                     self.encoder.resolve_query_set(&set, 0..count, &resolve, 0);
                     self.encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, bytes);
@@ -217,7 +213,11 @@ impl<'c> Profiler<'c> {
                     let view = read.slice(..).get_mapped_range().map_err(|e| {
                         Error::Gpu(format!("mapping the timestamp buffer failed: {e}"))
                     })?;
-                    bytemuck::pod_collect_to_vec(&view[..bytes as usize])
+                    let ticks = bytemuck::pod_collect_to_vec(&view[..bytes as usize]);
+                    drop(view);
+                    // A pooled buffer: unmapped for its next user.
+                    read.unmap();
+                    ticks
                 } else {
                     Vec::new()
                 };

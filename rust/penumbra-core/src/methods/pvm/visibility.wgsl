@@ -1,3 +1,6 @@
+#import shaders/receiver.wgsl
+#import passes/shadow_test.wgsl
+
 // PVM pass 3 (Cournia 4.2, listing 4.2): light visibility per camera pixel.
 // Inside a penumbra volume (the PVDM is nearer the light than the pixel),
 // visibility is the fraction of a disk of the light's radius, centred on the
@@ -5,12 +8,10 @@
 // edge and the pixel, that lies on the unoccluded side (Eq. 4.1, 4.2), with
 // the optional 3k^2 - 2k^3 falloff; outside, the shadow-map test decides.
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
-@group(0) @binding(3) var volume_depth: texture_depth_2d;
-@group(0) @binding(4) var edge0_map: texture_2d<f32>;
-@group(0) @binding(5) var edge1_map: texture_2d<f32>;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
+@group(0) @binding(3) var volume_depth: texture_depth_2d_array;
+@group(0) @binding(4) var edge0_map: texture_2d_array<f32>;
+@group(0) @binding(5) var edge1_map: texture_2d_array<f32>;
 // mode.y bit 0: falloff.
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
@@ -55,26 +56,25 @@ fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
+    let px = pixel.px;
     var v = 0.0;
     var inside = 0.0;
-    if (!is_background(nt)) {
-        let p = textureLoad(gbuffer_position, px, 0).xyz;
-        let n = nt.xyz;
+    if (pixel.geometry) {
+        let p = pixel.p;
+        let n = pixel.n;
         let cos_theta = light_cosine(pvm, p, n);
         // Centre below the surface's horizon: the surface itself hides it.
         if (cos_theta > 0.0) {
             let q = biased_receiver(pvm, p, n, cos_theta);
             // Listing 4.2: in a volume when the PVDM is nearer the light than the pixel.
             if (map_depth(pvm, volume_depth, q.xyz) < q.w) {
-                let size_map = vec2<i32>(textureDimensions(edge0_map));
-                let t = clamp(vec2<i32>(floor(light_map_coords(pvm.light_space, q.xyz))), vec2<i32>(0), size_map - 1);
-                v = volume_visibility(p, textureLoad(edge0_map, t, 0).xyz, textureLoad(edge1_map, t, 0).xyz);
+                let m = light_map_point(pvm.light_space, q.xyz);
+                let t = map_texel(textureDimensions(edge0_map), m);
+                v = volume_visibility(p, textureLoad(edge0_map, t, m.layer, 0).xyz, textureLoad(edge1_map, t, m.layer, 0).xyz);
                 inside = 1.0;
                 atomicAdd(&pixels_in_volume, 1u);
             } else {

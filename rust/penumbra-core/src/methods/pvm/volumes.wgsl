@@ -1,3 +1,5 @@
+#import passes/light_view.wgsl
+
 // PVM pass 2 (Cournia 4.1.3): render the penumbra volumes' quadrilaterals
 // from the light into the penumbra volume map: the penumbra volume depth map
 // (PVDM, linear light depth / far, first-depth volume) and the two penumbra
@@ -5,14 +7,6 @@
 // silhouette edge that gave rise to the volume), in one pass with multiple
 // render targets and float32 edge points.
 
-struct VolumeUniforms {
-    view_proj: mat4x4<f32>,
-    view: mat4x4<f32>,
-    // near, far, unused, unused
-    depth: vec4<f32>,
-};
-
-@group(0) @binding(0) var<uniform> volumes: VolumeUniforms;
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
@@ -31,8 +25,8 @@ struct VertexOut {
 fn vs_main(v: VertexIn) -> VertexOut {
     var out: VertexOut;
     let p = vec4<f32>(v.position, 1.0);
-    out.clip = volumes.view_proj * p;
-    out.light_depth = -(volumes.view * p).z;
+    out.clip = shadow.view_proj * p;
+    out.light_depth = -(shadow.view * p).z;
     out.h0 = v.h0;
     out.h1 = v.h1;
     return out;
@@ -48,7 +42,7 @@ struct VolumeMapOut {
 fn fs_main(in: VertexOut) -> VolumeMapOut {
     var out: VolumeMapOut;
     // far > 0 by construction of the frustum.
-    out.depth = clamp(in.light_depth / volumes.depth.y, 0.0, 1.0);
+    out.depth = clamp(in.light_depth / shadow.depth.y, 0.0, 1.0);
     out.edge0 = vec4<f32>(in.h0, 1.0);
     out.edge1 = vec4<f32>(in.h1, 1.0);
     return out;
