@@ -76,9 +76,12 @@ fn pcf_tap(t: ShadowTest, map: texture_depth_2d_array, cmp: sampler_comparison, 
     if (!layer_active(ls, m.layer)) {
         return 1.0;
     }
-    // The plane's depth along the axis of the layer read (the same ray).
+    // The plane's depth along the axis of the layer read (the same ray). Where
+    // the plane lies beyond the far plane (or the ray passes above its
+    // horizon), only drawn surfaces hide it: a texel where nothing was drawn
+    // (cleared to the far plane, 1) passes.
     let depth = plane_depth(t, r, c) * layer_depth_scale(ls, r.layer, c, m.layer);
-    let reference = (depth - r.bias) / ls.depth.y;
+    let reference = min((depth - r.bias) / ls.depth.y, 1.0);
     return textureSampleCompareLevel(map, cmp, m.coords / ls.depth.z, m.layer, reference);
 }
 

@@ -83,15 +83,32 @@ fn disk_tap(px: vec2<u32>, i: u32, n: u32, stream: u32, rot: vec2<f32>) -> vec2<
     return vec2<f32>(rot.x * s.x - rot.y * s.y, rot.y * s.x + rot.x * s.y);
 }
 
-// World-unit light depth, along the axis of `layer`, of the surface stored
-// in the map at the texel under `c` (coordinates in `layer`; on a cube,
-// beyond its edges they read the neighbour face; no comparison).
-fn texel_depth(layer: i32, c: vec2<f32>) -> f32 {
+// The blocker test's two depths for the texel under `c` (coordinates in the
+// receiver's layer; on a cube, beyond its edges they read the neighbour
+// face), both along the receiver layer's axis in world units: x, the
+// surface the map stores there; y, the receiver's plane along the ray
+// through that texel's centre (the ray the map sampled: along the tap's own
+// ray the plane would differ by its slope across the texel, and a plane seen
+// at a grazing angle would then find itself a blocker). A texel where
+// nothing was drawn (the far plane: beyond every surface) holds no blocker,
+// even where the ray passes above the receiver's plane's horizon.
+fn texel_blocker(r: Receiver, c: vec2<f32>) -> vec2<f32> {
     let ls = shadow.light_space;
-    let m = map_wrap(ls, layer, c);
-    // The read layer's depth per unit depth along `layer`'s axis is positive:
-    // the direction's dominant axis is the read face's.
-    return map_point_depth(ls, shadow_map, m) / layer_depth_scale(ls, layer, c, m.layer);
+    let m = map_wrap(ls, r.layer, c);
+    let centre = vec2<f32>(map_texel(textureDimensions(shadow_map), m)) + 0.5;
+    let stored = map_point_depth(ls, shadow_map, MapPoint(m.layer, centre));
+    if (stored >= ls.depth.y) {
+        return vec2<f32>(1.0, 0.0);
+    }
+    // The texel centre in the receiver's layer's coordinates.
+    var at = centre;
+    if (m.layer != r.layer) {
+        at = view_coords(ls, layer_frame(ls, r.layer, light_ray(ls, m.layer, centre)));
+    }
+    // The read layer's depth per unit depth along the receiver layer's axis
+    // is positive: the direction's dominant axis is the read face's.
+    let z = stored / layer_depth_scale(ls, r.layer, at, m.layer);
+    return vec2<f32>(z, plane_depth(shadow, r, at));
 }
 
 fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
@@ -125,9 +142,9 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
     var blockers = 0u;
     for (var i = 0u; i < nb * nb; i++) {
         let c = r.coords + search * disk_tap(px, i, nb, BLOCKER_STREAM, rot);
-        let z = texel_depth(r.layer, c);
-        if (z < plane_depth(shadow, r, c) - r.bias) {
-            blocker_sum += z;
+        let b = texel_blocker(r, c);
+        if (b.x < b.y - r.bias) {
+            blocker_sum += b.x;
             blockers += 1u;
         }
     }
