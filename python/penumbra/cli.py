@@ -162,6 +162,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PenumbraError as e:
         print(f"penumbra: error: {e}", file=sys.stderr)
         return 2
+    except OSError as e:  # a file the command writes itself (e.g. --json)
+        print(f"penumbra: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

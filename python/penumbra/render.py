@@ -9,10 +9,13 @@ from typing import Any
 import numpy as np
 
 from penumbra import _core
-from penumbra.errors import CameraError, ParameterError, SceneError
+from penumbra.errors import CameraError, ParameterError, PenumbraIOError, SceneError
 from penumbra.scene import Camera, Scene
 
-__all__ = ["Renderer", "RenderResult", "adapter_info", "write_image", "methods", "method_info", "MethodInfo", "Param"]
+__all__ = ["Renderer", "RenderResult", "adapter_info", "write_image", "methods", "method_info", "MethodInfo", "Param", "IMAGES"]
+
+#: The images every render returns, whatever the method (intermediates add more).
+IMAGES = ("radiance", "visibility", "depth", "normal", "position", "object_id")
 
 
 def adapter_info() -> dict[str, Any]:
@@ -87,6 +90,22 @@ def method_info(method: str | None = None) -> Any:
     return infos[method]
 
 
+def _check_wide_integers(method: str, params: dict[str, Any]) -> None:
+    """An integer beyond int64 cannot reach the core (its parameters are
+    64-bit): refused here with the declared range, as the core words it,
+    rather than converted to a float or described as one."""
+    for name, value in params.items():
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+            continue
+        if -(2**63) <= int(value) < 2**63:
+            continue
+        try:
+            accepted = method_info(method).param(name).range
+        except ParameterError:
+            continue  # an unknown method or parameter: the core names it
+        raise ParameterError(f"parameter '{name}' of method '{method}' must be {accepted}, got int {int(value)}")
+
+
 def parameter_table(method: str) -> str:
     """A Markdown table of ``method``'s parameters (name, default, accepted values, meaning)."""
     rows = ["| parameter | default | values | meaning |", "|---|---|---|---|"]
@@ -97,15 +116,34 @@ def parameter_table(method: str) -> str:
     return "\n".join(rows)
 
 
-def write_image(path: str | os.PathLike[str], image: np.ndarray) -> None:
+def write_image(path: str | bytes | os.PathLike[str] | os.PathLike[bytes], image: np.ndarray) -> None:
     """Writes a linear float image (H, W) or (H, W, 3) by extension: ``.png``
-    sRGB-encoded 8-bit, ``.exr`` linear float, ``.npy`` the array as is."""
-    path = os.fspath(path)
-    array = np.asarray(image)
+    sRGB-encoded 8-bit, ``.exr`` linear float, ``.npy`` the array as is.
+
+    Raises :class:`~penumbra.errors.ParameterError` for a path that is not a
+    path, a non-numeric image, a wrong shape or extension, and NaN or
+    infinity in a PNG or EXR; :class:`~penumbra.errors.PenumbraIOError` when
+    the file cannot be written."""
+    try:
+        path = os.fsdecode(path)
+    except TypeError:
+        raise ParameterError(f"path must be a str or os.PathLike, got {type(path).__name__}") from None
+    try:
+        array = np.asarray(image)
+    except (TypeError, ValueError) as e:
+        raise ParameterError(f"image must be a numeric array: {e}") from None
+    if array.dtype.kind not in "biuf":
+        raise ParameterError(f"image must be a numeric array, got dtype {array.dtype}")
     if path.lower().endswith(".npy"):
-        np.save(path, array)
+        try:
+            np.save(path, array)
+        except OSError as e:
+            raise PenumbraIOError(f"writing {path}: {e.strerror or e}") from None
         return
-    _core.write_image(path, np.ascontiguousarray(array, dtype=np.float32))
+    with np.errstate(over="ignore"):
+        # Beyond float32's range becomes inf, which the core then refuses.
+        data = np.ascontiguousarray(array, dtype=np.float32)
+    _core.write_image(path, data)
 
 
 @dataclass
@@ -192,7 +230,10 @@ class Renderer:
     """
 
     def __init__(self, timing: str = "auto", pass_cache: bool = True) -> None:
-        self._core = _core.Renderer(timing, bool(pass_cache))
+        if not isinstance(timing, str):
+            raise ParameterError(f"timing must be 'auto' or 'cpu', got {timing!r}")
+        # The core parses the mode and refuses a pass_cache that is not a bool.
+        self._core = _core.Renderer(timing, pass_cache)
 
     @property
     def pass_cache(self) -> bool:
@@ -243,7 +284,7 @@ class Renderer:
         returns the method's intermediate images (e.g. ``shadow_map``)."""
         if not isinstance(scene, Scene):
             raise SceneError(f"expected a penumbra.Scene, got {type(scene).__name__}")
-        scene.check()
+        core_scene = scene._core_value()
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {method!r}")
         camera = camera or scene.camera
@@ -251,13 +292,7 @@ class Renderer:
             raise CameraError("the scene has no camera; pass camera=penumbra.Camera(...)")
         if not isinstance(camera, Camera):
             raise CameraError(f"camera must be a penumbra.Camera, got {type(camera).__name__}")
-        out = self._core.render(
-            [m._core_args(i) for i, m in enumerate(scene.meshes)],
-            scene.light._core_args(),
-            camera._core_args(),
-            np.asarray(scene.ambient, dtype=np.float32),
-            method,
-            params,
-            bool(intermediates),
-        )
+        _check_wide_integers(method, params)
+        # intermediates goes as is: the core refuses anything but a bool.
+        out = self._core.render(core_scene, camera._core_value(), method, params, intermediates)
         return RenderResult(**out)

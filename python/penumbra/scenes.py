@@ -16,6 +16,7 @@ above, seen by a camera from the front and above:
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Callable
 
 import numpy as np
@@ -117,7 +118,7 @@ def names() -> list[str]:
 
 def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = None, light_radius: float | None = None) -> Scene:
     """Builds the built-in scene ``name``, optionally at another image size or light radius."""
-    if name not in _SCENES:
+    if not isinstance(name, str) or name not in _SCENES:
         raise ParameterError(f"unknown scene {name!r}; built-in scenes: {names()}")
     scene = _SCENES[name]()
     assert scene.camera is not None
@@ -171,12 +172,26 @@ def _obj_with_relative_indices(path: str) -> trimesh.Trimesh | None:
 def load_mesh(path: str) -> trimesh.Trimesh:
     """The triangles of a mesh file (anything trimesh reads; OBJ files with
     relative indices read here), as they are in the file."""
-    try:
-        loaded = _obj_with_relative_indices(path) or trimesh.load(path, force="mesh")
-    except Exception as e:  # trimesh raises many types for unreadable files
-        raise MeshError(f"cannot read mesh file {path!r}: {e}") from None
+    # trimesh merges vertices by casting their coordinates to integers: a
+    # coordinate beyond float32's range warns there ("invalid value in cast")
+    # and may collapse the mesh. The coordinates are checked, and named,
+    # before that warning reaches the caller.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            loaded = _obj_with_relative_indices(path) or trimesh.load(path, force="mesh")
+        except Exception as e:  # trimesh raises many types for unreadable files
+            raise MeshError(f"cannot read mesh file {path!r}: {e}") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise MeshError(f"mesh file {path!r} holds no triangles")
+    raw = np.asarray(loaded.vertices, dtype=np.float64)
+    limit = float(np.finfo(np.float32).max)
+    bad = ~(np.abs(raw) <= limit).all(axis=1)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise MeshError(f"mesh file {path!r}: vertex {i} {raw[i].tolist()} has a coordinate that is NaN, infinite or beyond float32's range (+-{limit:.4g})")
+    for w in caught:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
     extent = float(np.max(loaded.extents))
     if not math.isfinite(extent) or extent <= 0:
         raise MeshError(f"mesh file {path!r} has a degenerate or non-finite bounding box")

@@ -16,7 +16,7 @@ pub mod silhouettes;
 pub mod topology;
 
 pub use error::{Error, Result};
-pub use gpu::{adapter_summary, AdapterSummary, TimingSource, Timings};
+pub use gpu::{adapter_summary, AdapterSummary, TimingMode, TimingSource, Timings};
 pub use methods::{methods, MethodConfig, ParamKind, ParamSpec, ParamValue, REGISTRY};
 pub use renderer::{Image, ImageData, RenderOptions, RenderResult, Renderer};
 pub use scene::{Camera, Mesh, Scene, SphereLight};

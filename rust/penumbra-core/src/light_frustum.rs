@@ -196,8 +196,18 @@ impl LightFrustum {
         let mut sum = Vec3::ZERO;
         let mut count = 0usize;
         for p in points.clone() {
-            // Normalisation is safe: the scene check keeps every surface off the light.
-            sum += (p - center).normalize_or_zero();
+            // Normalisation is safe: the scene check keeps every surface off the
+            // light. Where the squared length would underflow or overflow
+            // float32 (a scene 1e-25 across, or 1e19), dividing by the largest
+            // component first brings it into [1, 3].
+            let d = p - center;
+            let length_squared = d.length_squared();
+            sum += if length_squared.is_normal() && length_squared.is_finite() {
+                d.normalize_or_zero()
+            } else {
+                let m = d.abs().max_element();
+                if m > 0.0 { (d / m).normalize_or_zero() } else { Vec3::ZERO }
+            };
             count += 1;
         }
         if count == 0 {
@@ -205,7 +215,13 @@ impl LightFrustum {
         }
         let mut axis = sum.normalize_or_zero();
         if axis == Vec3::ZERO || sum.length() < 1e-3 * count as f32 {
-            return Err(surrounds_error(180.0));
+            // No mean direction: geometry on every side of the light.
+            return Err(Error::InvalidScene(format!(
+                "geometry surrounds the light: the directions from the light to the vertices \
+                 cancel out (geometry on every side), so no frustum of {MAX_HALF_ANGLE_DEGREES} \
+                 degrees half-angle covers it; projection='auto' (the default) or 'cube' renders \
+                 such scenes with cube-map faces"
+            )));
         }
         let mut fitted = Self::fit_along(center, axis, points.clone())?;
         let w = fitted.window;
@@ -307,6 +323,22 @@ fn clip_to_cone(triangle: [DVec3; 3], planes: &[DVec3; 4]) -> Vec<DVec3> {
     polygon[..len].to_vec()
 }
 
+/// The error of a projection that sample `sample` (1-based) of `count` on
+/// the light's sphere (the `reference` method's) cannot have, saying which
+/// sample: the light's centre may see the geometry within one frustum where
+/// a sample on the light's surface does not.
+pub fn light_sample_error(error: Error, method: &str, sample: usize, count: usize, position: Vec3) -> Error {
+    match error {
+        Error::InvalidScene(message) => Error::InvalidScene(format!(
+            "method '{method}', light sample {sample} of {count} (at {:?}, on the light's sphere): \
+             {message}. The light's centre may see the geometry within one frustum where its \
+             samples do not; a smaller radius or a light further above the geometry also helps",
+            position.to_array()
+        )),
+        other => other,
+    }
+}
+
 fn surrounds_error(angle: f32) -> Error {
     Error::InvalidScene(format!(
         "geometry surrounds the light: a vertex lies {angle:.1} degrees off the shadow-map axis, \
@@ -361,6 +393,18 @@ mod tests {
         let points = plane_points();
         let err = LightFrustum::fit(Vec3::new(0.0, 0.5, 0.0), points.iter().copied()).unwrap_err();
         assert!(err.to_string().contains("surrounds the light"), "{err}");
+        // A light at the centre of a cube's corners: no mean direction at all.
+        let cube: Vec<Vec3> = (0..8).map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, (i >> 2) as f32) * 2.0 - 1.0).collect();
+        let err = LightFrustum::fit(Vec3::ZERO, cube.iter().copied()).unwrap_err().to_string();
+        assert!(err.contains("every side") && !err.contains("180"), "{err}");
+    }
+
+    #[test]
+    fn a_light_sample_error_names_the_sample_and_the_remedy() {
+        let points = plane_points();
+        let err = LightFrustum::fit(Vec3::new(0.0, 0.5, 0.0), points.iter().copied()).unwrap_err();
+        let err = light_sample_error(err, "reference", 3, 16, Vec3::new(0.0, 0.5, 0.0)).to_string();
+        assert!(err.contains("light sample 3 of 16") && err.contains("degrees off") && err.contains("projection='auto'"), "{err}");
     }
 
     /// Two triangles of a 10 x 10 floor at y = 0.

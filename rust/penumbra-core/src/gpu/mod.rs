@@ -7,4 +7,4 @@ pub mod profiler;
 pub mod readback;
 
 pub use context::{adapter_summary, AdapterSummary, GpuContext};
-pub use profiler::{PassTimestamps, Profiler, TimingSource, Timings};
+pub use profiler::{PassTimestamps, Profiler, TimingMode, TimingSource, Timings};

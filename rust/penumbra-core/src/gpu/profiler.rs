@@ -22,6 +22,34 @@ impl TimingSource {
     }
 }
 
+/// How a renderer times its passes, as the caller names it: `"auto"` (GPU
+/// timestamps where the adapter has them, else CPU clocks) or `"cpu"` (CPU
+/// clocks around each pass).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimingMode {
+    Auto,
+    Cpu,
+}
+
+impl TimingMode {
+    /// Whether to use GPU timestamp queries where the adapter has them.
+    pub fn uses_timestamps(self) -> bool {
+        self == TimingMode::Auto
+    }
+}
+
+impl std::str::FromStr for TimingMode {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "auto" => Ok(TimingMode::Auto),
+            "cpu" => Ok(TimingMode::Cpu),
+            other => Err(Error::InvalidParameter(format!("timing must be 'auto' or 'cpu', got {other:?}"))),
+        }
+    }
+}
+
 /// Milliseconds per named pass, in the order they ran.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Timings {
@@ -205,5 +233,19 @@ impl<'c> Profiler<'c> {
         };
         let encoder = Self::new_encoder(self.ctx);
         Ok((Timings { source, passes }, encoder))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timing_modes_parse_by_name() {
+        assert_eq!("auto".parse::<TimingMode>(), Ok(TimingMode::Auto));
+        assert_eq!("cpu".parse::<TimingMode>(), Ok(TimingMode::Cpu));
+        assert!(TimingMode::Auto.uses_timestamps() && !TimingMode::Cpu.uses_timestamps());
+        let err = "sometimes".parse::<TimingMode>().unwrap_err();
+        assert!(matches!(&err, Error::InvalidParameter(m) if m.contains("'auto' or 'cpu'")), "{err}");
     }
 }

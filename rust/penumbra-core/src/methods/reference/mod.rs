@@ -31,7 +31,7 @@ use crate::frame::Frame;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::gpu::pool::PooledTexture;
-use crate::light_frustum::LightProjection;
+use crate::light_frustum::{light_sample_error, LightProjection};
 use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
@@ -314,7 +314,12 @@ impl Method for ReferenceShadows {
             let corners = ctx.corner_positions();
             let projections = samples
                 .iter()
-                .map(|s| LightProjection::fit(s.position.as_vec3(), &points, corners, params.shadow.projection))
+                .enumerate()
+                .map(|(i, s)| {
+                    let position = s.position.as_vec3();
+                    LightProjection::fit(position, &points, corners, params.shadow.projection)
+                        .map_err(|e| light_sample_error(e, "reference", i + 1, samples.len(), position))
+                })
                 .collect::<Result<Vec<_>>>()?;
             let align = ctx.device.limits().min_storage_buffer_offset_alignment as usize;
             let stride = |size: usize| size.div_ceil(align) * align;
