@@ -8,6 +8,7 @@ import sys
 from typing import Any, Sequence
 
 from penumbra import scenes
+from penumbra.comparison import DEFAULT_BUDGET_S, DEFAULT_REPEATS
 from penumbra.errors import ParameterError, PenumbraError
 from penumbra.render import Renderer, adapter_info, methods
 
@@ -129,8 +130,8 @@ def build_parser() -> argparse.ArgumentParser:
     render = sub.add_parser("render", help="render a built-in scene or a mesh file with one method, timed")
     _scene_arguments(render, "512")
     render.add_argument("--method", default="pcss", help="shadow method (default pcss; see `penumbra methods`)")
-    render.add_argument("--repeats", type=int, default=3,
-                        help="timed renders after a warm-up; the warm time printed is their median (default 3; 0: render once, untimed warm-up)")
+    render.add_argument("--repeats", type=int, default=DEFAULT_REPEATS,
+                        help=f"timed renders after a warm-up; the warm time printed is their median (default {DEFAULT_REPEATS}; 0: render once, the first render's time)")
     render.add_argument("--image", default="radiance", help="which image to write (radiance, visibility, depth, ...)")
     render.add_argument("-o", "--output", default="penumbra.png", help="output file: .png (sRGB), .exr or .npy (linear)")
     render.set_defaults(run=_render)
@@ -141,7 +142,8 @@ def build_parser() -> argparse.ArgumentParser:
     _scene_arguments(comp, "256")
     comp.add_argument("--method", action="append", help="a method to compare, repeatable (default: every implemented method)")
     comp.add_argument("--spp", type=int, default=1024, help="ground-truth samples per pixel (default 1024)")
-    comp.add_argument("--repeats", type=int, default=3, help="timed renders per method after a warm-up; times are their median (default 3)")
+    comp.add_argument("--repeats", type=int, default=DEFAULT_REPEATS,
+                      help=f"timed renders per method after a warm-up, fewer once they add up to {DEFAULT_BUDGET_S:g} s; times are their median (default {DEFAULT_REPEATS})")
     comp.add_argument("--cache-dir", help="ground-truth cache folder (default $PENUMBRA_CACHE_DIR or ~/.cache/penumbra)")
     comp.add_argument("--json", help="also write every figure to this JSON file")
     comp.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")

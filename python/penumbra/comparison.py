@@ -8,7 +8,7 @@ every pass, read-back). The warm-up's own time is kept as ``cold_ms`` (it
 includes building pipelines and the driver's shader compilation). Renders
 are timed without a pass cache, so every timed render runs every pass, and on
 a software adapter (lavapipe) with CPU clocks around each pass, since its GPU
-timestamps under-read (README, "How the GPU is chosen")."""
+timestamps under-read (the README's "Timings")."""
 
 from __future__ import annotations
 
@@ -34,6 +34,7 @@ __all__ = [
     "Timing",
     "compare",
     "compare_methods",
+    "horizon_band",
     "comparison_figure",
     "methods_figure",
     "timed_render",
@@ -51,7 +52,7 @@ __all__ = [
 #: third of ``reference``'s error (docs/ground_truth.md has noise against spp).
 DEFAULT_SIZE = 256
 DEFAULT_SPP = 1024
-DEFAULT_REPEATS = 3
+DEFAULT_REPEATS = 5
 #: Timed renders of one method stop early once they add up to this many
 #: seconds (at least one is always timed): ``reference`` takes seconds a render.
 DEFAULT_BUDGET_S = 5.0
@@ -87,6 +88,13 @@ def timing_renderer() -> Renderer:
     return Renderer(timing, pass_cache=False)
 
 
+def _uncached_render(renderer: Renderer, scene: Scene, method: str, camera: Camera | None, params: dict[str, Any]) -> RenderResult:
+    """One render that runs every pass: a renderer's pass cache is cleared first."""
+    if renderer.pass_cache:
+        renderer.clear_pass_cache()
+    return renderer.render(scene, method, camera=camera, **params)
+
+
 def timed_render(
     renderer: Renderer,
     scene: Scene,
@@ -106,9 +114,7 @@ def timed_render(
         raise ParameterError(f"repeats must be an integer of at least 1, got {repeats!r}")
 
     def once() -> RenderResult:
-        if renderer.pass_cache:
-            renderer.clear_pass_cache()
-        return renderer.render(scene, method, camera=camera, **params)
+        return _uncached_render(renderer, scene, method, camera, params)
 
     result = once()
     cold = result.total_ms
@@ -250,28 +256,29 @@ class MethodComparison:
         """Which clock, and how the times were taken."""
         passes = {"cpu_clock": "CPU clocks", "gpu_timestamps": "GPU timestamps"}.get(self.baseline.pass_clock, self.baseline.pass_clock)
         fewer = f" (fewer once they add up to {self.budget_s:g} s)" if self.budget_s is not None else ""
-        return f"wall clock of each render call, median of {self.repeats} after a warm-up render{fewer}; passes by {passes}"
+        return (f"wall clock of each render call, median of {self.repeats} after a warm-up render{fewer}, "
+                f"taken in rounds of one render per method; passes by {passes}")
 
     def table(self) -> str:
         """The figures of the picture as a markdown table, the ground truth's
         noise in the last row."""
         head = (
-            "| method | penumbra RMSE | vis. RMSE | max error | FLIP | radiance RMSE (rel.) | warm ms | timed | time / hard | first render ms |\n"
-            "|---|---|---|---|---|---|---|---|---|---|"
+            "| method | penumbra RMSE | cast shadows | vis. RMSE | max error | FLIP | radiance RMSE (rel.) | warm ms | timed | time / hard | first render ms |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|"
         )
         lines = [head]
         for row in self.rows:
             m, t = row.metrics, row.timing
             assert t is not None
             lines.append(
-                f"| {row.result.method} | {m['visibility_rmse_penumbra']:.4f} | {m['visibility_rmse']:.4f} | "
+                f"| {row.result.method} | {m['visibility_rmse_penumbra']:.4f} | {m.get('visibility_rmse_penumbra_cast', math.nan):.4f} | {m['visibility_rmse']:.4f} | "
                 f"{m['visibility_max_error']:.3f} | {m['visibility_flip']:.4f} | {m['radiance_rmse_rel']:.4f} | "
                 f"{t.warm_ms:.1f} | {len(t.timed_ms)} | {self.time_over_hard(row):.2f} | {t.cold_ms:.0f} |"
             )
         if self.rows and "noise_visibility_rmse" in self.rows[0].metrics:
             m = self.rows[0].metrics
             lines.append(
-                f"| *ground-truth noise* | {m['noise_visibility_rmse_penumbra']:.4f} | {m['noise_visibility_rmse']:.4f} | "
+                f"| *ground-truth noise* | {m['noise_visibility_rmse_penumbra']:.4f} | {m.get('noise_visibility_rmse_penumbra_cast', math.nan):.4f} | {m['noise_visibility_rmse']:.4f} | "
                 f"{m['noise_visibility_max_error']:.3f} | {m['noise_visibility_flip']:.4f} | {m['noise_radiance_rmse_rel']:.4f} | | | | |"
             )
         return "\n".join(lines)
@@ -357,46 +364,88 @@ def compare_methods(
     camera = camera or scene.camera
 
     # Renders first: a parameter a method refuses shows in seconds, before
-    # the ground truth's first (uncached) render.
-    rendered: list[tuple[RenderResult, Timing]] = []
+    # the ground truth's first (uncached) render. Each method's warm-up
+    # render, then the timed renders in rounds, one of each method per round:
+    # a shared machine's load, which drifts over seconds, then weighs on every
+    # method alike instead of on whichever ran during a busy spell.
+    timed_names = names if "hard" in names else [*names, "hard"]
+    warm: dict[str, RenderResult] = {}
+    cold: dict[str, float] = {}
     skipped: dict[str, str] = {}
     errors: list[InvalidInputError] = []
-    baseline: Timing | None = None
-    for i, name in enumerate(names, 1):
-        say(f"{name} ({i}/{len(names)}): a warm-up render, then up to {repeats} timed")
-        t0 = time.perf_counter()
+    for i, name in enumerate(timed_names, 1):
+        role = "" if name in names else ", the time baseline, with its defaults"
+        say(f"{name} ({i}/{len(timed_names)}{role}): warm-up render")
         try:
-            result, timing = timed_render(renderer, scene, name, repeats=repeats, budget_s=budget_s, camera=camera, **params)
+            warm[name] = _uncached_render(renderer, scene, name, camera, params if name in names else {})
         except InvalidInputError as e:
             if len(names) == 1:
                 raise
+            if name == "hard" and name in names:
+                # Refused the parameters: still timed as the baseline, with its defaults.
+                timed_names.append("hard")
+                names = [n for n in names if n != "hard"]
             skipped[name] = str(e)
             errors.append(e)
             say(f"{name}: skipped: {e}")
             continue
-        say(f"{name}: {timing.warm_ms:.1f} ms warm (median of {len(timing.timed_ms)}), "
-            f"{timing.cold_ms:.0f} ms first ({time.perf_counter() - t0:.1f} s)")
-        rendered.append((result, timing))
-        if name == "hard":
-            baseline = timing
-    if not rendered:
+        cold[name] = warm[name].total_ms
+    if not any(name in warm for name in names):
         raise errors[0]
-    if baseline is None:
-        say("hard (the time baseline, with its defaults): a warm-up render, then up to {repeats} timed".format(repeats=repeats))
-        baseline = timed_render(renderer, scene, "hard", repeats=repeats, budget_s=budget_s, camera=camera)[1]
+    if "hard" not in warm:
+        raise errors[-1]
+    timed: dict[str, list[float]] = {name: [] for name in warm}
+    last: dict[str, RenderResult] = dict(warm)
+    for round_ in range(1, repeats + 1):
+        active = [n for n in warm if budget_s is None or not timed[n] or sum(timed[n]) < 1e3 * budget_s]
+        if not active:
+            break
+        say(f"timed round {round_}/{repeats}: {', '.join(active)}")
+        for name in active:
+            last[name] = _uncached_render(renderer, scene, name, camera, params if name in names else {})
+            timed[name].append(last[name].total_ms)
+    timings = {name: Timing(cold[name], timed[name], last[name].timing_source) for name in warm}
+    for name in warm:
+        say(f"{name}: {timings[name].warm_ms:.1f} ms warm (median of {len(timed[name])}), {cold[name]:.0f} ms first")
+    rendered = [(last[name], timings[name]) for name in names if name in warm]
+    baseline = timings["hard"]
 
     started = time.perf_counter()
     say(f"ground truth: Mitsuba, {spp} spp, two seeds (cached after the first run)")
     gt = ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
     cached = all(gt.cached.values()) and (gt.second is None or all(gt.second.cached.values()))
     say(f"ground truth: {gt.variant}, {'read from the cache' if cached else 'rendered'} in {time.perf_counter() - started:.1f} s")
-    rows = [Comparison(result, gt, metrics_module.compare(result, gt), timing) for result, timing in rendered]
+    rows = [Comparison(result, gt, _with_cast_shadows(metrics_module.compare(result, gt), result, gt, scene), timing)
+            for result, timing in rendered]
     info = renderer.adapter_info
     comparison = MethodComparison(scene, gt, rows, baseline, params, skipped, dict(info), repeats, budget_s)
     if out is not None:
         say(f"drawing {os.fspath(out)}")
         comparison.save_figure(out)
     return comparison
+
+
+def horizon_band(result: RenderResult, scene: Scene) -> np.ndarray:
+    """Pixels whose surface has the light sphere cut by its own horizon
+    (``|n . (c - p)| < r``): a smooth caster's terminator, where the true
+    visibility fades because part of the light sets below the surface, not
+    because something occludes it. Shadow-map methods are hard there (a
+    surface facing away from the light's centre gets visibility 0)."""
+    to_light = np.asarray(scene.light.center, dtype=np.float64) - result.position.astype(np.float64)
+    band = np.abs((result.normal.astype(np.float64) * to_light).sum(axis=-1)) < float(scene.light.radius)
+    return band & (result.object_id >= 0)
+
+
+def _with_cast_shadows(m: dict[str, float], result: RenderResult, gt: GroundTruth, scene: Scene) -> dict[str, float]:
+    """Adds ``visibility_rmse_penumbra_cast``: the penumbra RMSE over the
+    penumbra less the :func:`horizon_band`, i.e. over the shadows cast by
+    occluders (with its noise when the ground truth has a second seed)."""
+    cast = metrics_module.penumbra_region(gt.visibility) & ~horizon_band(result, scene)
+    m = dict(m)
+    m["visibility_rmse_penumbra_cast"] = metrics_module.rmse(result.visibility, gt.visibility, cast)
+    if gt.second is not None:
+        m["noise_visibility_rmse_penumbra_cast"] = metrics_module.rmse(gt.visibility, gt.second.visibility, cast) / math.sqrt(2)
+    return m
 
 
 def _short_params(params: dict[str, Any]) -> str:
@@ -448,14 +497,15 @@ def methods_figure(c: MethodComparison, path: str | os.PathLike[str]) -> None:
     rows_y, cols_x = _crop(truth, diffs)
     limit = ERROR_SCALE
     n = len(c.rows) + 1
+    slots = max(n, 5)  # room for the scatter and the notes beside few rows
     cell, top_in, bottom_in = 1.45, 0.75, 0.75
-    height = n * cell + top_in + bottom_in
+    height = slots * cell + top_in + bottom_in
     fig = plt.figure(figsize=(2 * cell + 1.75 + 4.3, height))
-    outer = GridSpec(1, 2, figure=fig, width_ratios=[2 * cell + 1.75, 4.0], wspace=0.1,
+    outer = GridSpec(1, 2, figure=fig, width_ratios=[2 * cell + 1.75, 4.0], wspace=0.16,
                      left=0.045, right=0.985, top=1 - top_in / height, bottom=bottom_in / height)
-    grid = outer[0].subgridspec(n, 3, width_ratios=[1, 1, 1.2], wspace=0.06, hspace=0.08)
-    span = max(2, min(n - 1, (n * 3 + 4) // 5))
-    side = outer[1].subgridspec(2, 1, height_ratios=[span, n - span], hspace=0.25)
+    grid = outer[0].subgridspec(slots, 3, width_ratios=[1, 1, 1.3], wspace=0.06, hspace=0.08)
+    span = max(2, min(slots - 1, (slots * 3 + 4) // 5))
+    side = outer[1].subgridspec(2, 1, height_ratios=[span, slots - span], hspace=0.25)
 
     background = c.rows[0].result.object_id < 0
 
@@ -481,7 +531,9 @@ def methods_figure(c: MethodComparison, path: str | os.PathLike[str]) -> None:
         m, t = row.metrics, row.timing
         warm = f"{t.warm_ms:.0f} ms warm" if t else ""
         ratio = c.time_over_hard(row)
-        label(ax_t, f"penumbra RMSE {m['visibility_rmse_penumbra']:.3f}\n{ratio:.{2 if ratio < 10 else 0}f} x hard's time\n({warm})")
+        cast = m.get("visibility_rmse_penumbra_cast", math.nan)
+        label(ax_t, f"penumbra RMSE {m['visibility_rmse_penumbra']:.3f}\n  cast shadows {cast:.3f}\n"
+                    f"{ratio:.{2 if ratio < 10 else 0}f} x hard's time\n({warm})")
         if i == 0:
             ax_v.set_title("visibility", fontsize=9)
             ax_e.set_title("method - ground truth", fontsize=9)
@@ -506,7 +558,10 @@ def methods_figure(c: MethodComparison, path: str | os.PathLike[str]) -> None:
     ax_s = fig.add_subplot(side[0])
     xs = [c.time_over_hard(row) for row in c.rows]
     ys = [row.metrics["visibility_rmse_penumbra"] for row in c.rows]
-    ax_s.scatter(xs, ys, s=24, color="tab:blue", zorder=3)
+    ax_s.scatter(xs, ys, s=24, color="tab:blue", zorder=3, label="penumbra")
+    casts = [row.metrics.get("visibility_rmse_penumbra_cast", math.nan) for row in c.rows]
+    ax_s.scatter(xs, casts, s=24, facecolors="none", edgecolors="tab:orange", zorder=3, label="cast shadows")
+    ax_s.legend(fontsize=7, loc="upper right", title="penumbra RMSE", title_fontsize=7)
     right = max(xs)
     placed: list[tuple[float, float]] = []
     for x, y, row in sorted(zip(xs, ys, c.rows), key=lambda p: (p[0], p[1])):
@@ -523,9 +578,14 @@ def methods_figure(c: MethodComparison, path: str | os.PathLike[str]) -> None:
     ax_s.set_yscale("log")
     ax_s.margins(x=0.12, y=0.12)
     ax_s.set_xlabel("warm time / hard's (log)", fontsize=8)
-    ax_s.set_ylabel("penumbra visibility RMSE (log)", fontsize=8)
+    ax_s.set_ylabel("visibility RMSE (log)", fontsize=8)
     ax_s.set_title("time against error (lower left is better)", fontsize=9)
-    ax_s.tick_params(labelsize=7)
+    ax_s.tick_params(which="both", labelsize=7)
+    from matplotlib.ticker import FormatStrFormatter
+
+    for axis in (ax_s.xaxis, ax_s.yaxis):
+        axis.set_major_formatter(FormatStrFormatter("%g"))
+        axis.set_minor_formatter(FormatStrFormatter(""))
     ax_s.grid(True, which="both", linewidth=0.3, alpha=0.5)
 
     camera = c.scene.camera
@@ -537,12 +597,13 @@ def methods_figure(c: MethodComparison, path: str | os.PathLike[str]) -> None:
     crop = f"rows {rows_y.start}-{rows_y.stop}, columns {cols_x.start}-{cols_x.stop}"
     notes = [
         f"Times: {c.clock}. hard: {c.baseline.warm_ms:.0f} ms on {c.adapter.get('name', 'this adapter')}{software}.",
-        "Penumbra RMSE: the visibility error over the pixels whose true visibility is in (0.02, 0.98).",
+        "Penumbra RMSE: the visibility error over the pixels whose true visibility is in (0.02, 0.98); "
+        "cast shadows: the same less the pixels whose surface has the light cut by its horizon (the sphere's terminator).",
         f"Images cropped to the shadows ({crop}); errors clipped at +-{limit:g}.",
         "`penumbra compare` prints every figure as a table.",
     ]
     if c.skipped:
-        notes += [f"Skipped {k}: {v}" for k, v in c.skipped.items()]
+        notes += [f"Skipped {k}: {v if len(v) < 150 else v[:147] + '...'}" for k, v in c.skipped.items()]
     ax_n = fig.add_subplot(side[1])
     ax_n.axis("off")
     ax_n.text(0.0, 1.0, "\n".join(textwrap.fill(line, 70) for line in notes), fontsize=7.5, ha="left", va="top",
