@@ -86,7 +86,7 @@ def _light(radius: float) -> SphereLight:
 def _sphere_on_plane() -> Scene:
     # Smooth: vertex normals on five subdivisions (20480 faces). Flat faces
     # look faceted and, smaller than a pixel, shade each pixel by the one face
-    # its centre hits where Mitsuba averages the pixel (0.9-1.2% radiance
+    # its centre hits where Mitsuba averages the pixel (0.85-1.2% radiance
     # RMSE on the sphere); vertex normals on four subdivisions make shadow-map
     # tests leak light at the terminator, where the normals are 1.5-2.9
     # degrees off the faces (`reference` twice as far from the ground truth).
