@@ -116,14 +116,18 @@ def test_stats_intermediates_and_caches(renderer: penumbra.Renderer) -> None:
 
 def test_open_meshes_are_refused_unless_boundary_edges_are_silhouettes(renderer: penumbra.Renderer) -> None:
     base = penumbra.scenes.get(width=48, height=48)
-    scene = penumbra.Scene([ground_plane(), base.meshes[1]], base.light, base.camera)
+    # The flat four-subdivision sphere this equality was measured with: with
+    # the default scene's finer sphere (issue 23) one pixel of 1350 differs
+    # by 3e-4 between the two grounds, whose light frusta differ.
+    ball = sphere((0.0, 1.6, 0.0), 1.0)
+    scene = penumbra.Scene([ground_plane(), ball], base.light, base.camera)
     with pytest.raises(penumbra.MeshError, match=r"mesh 'ground'.*4 boundary edges.*open_edges='silhouette'"):
         renderer.render(scene, "pvm")
     result = renderer.render(scene, "pvm", open_edges="silhouette")
     assert np.isfinite(result.visibility).all()
     # The open plane's four rim edges stand in for the closed slab's four top-rim
     # silhouette edges: the same count, and the same visibility on the ground's top.
-    closed = renderer.render(penumbra.Scene([ground_slab(), base.meshes[1]], base.light, base.camera), "pvm")
+    closed = renderer.render(penumbra.Scene([ground_slab(), ball], base.light, base.camera), "pvm")
     assert result.stats["silhouette_edges"] == closed.stats["silhouette_edges"]
     top = (result.object_id == 0) & (closed.object_id == 0) & (result.normal[..., 1] > 0.99) & (closed.normal[..., 1] > 0.99)
     assert top.sum() > 500

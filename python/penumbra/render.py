@@ -224,7 +224,7 @@ class Renderer:
     with and without it. A reused pass does not appear in ``timings`` (it did
     not run); ``stats["reused_passes"]`` counts them and
     ``stats["reused_<pass>"]`` is 1 or 0 for each cacheable pass of the
-    method. A few entries per pass kind are kept (see the README's "Sweeps").
+    method. A few entries per pass kind are kept (see docs/sweeps.md).
     ``pass_cache=False`` runs every pass of every render from scratch: use it
     to time repeated renders.
     """
