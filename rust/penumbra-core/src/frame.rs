@@ -189,6 +189,12 @@ impl<'r> FrameContext<'r> {
         self.texture_of(label, TextureKey { size: (map_size, map_size), format, usage, layers })
     }
 
+    /// A pooled 2D array texture of `layers` layers (bound as an array
+    /// even with one layer), in use until the frame ends.
+    pub fn layered_texture(&self, label: &str, size: (u32, u32), layers: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> PooledTexture {
+        self.texture_of(label, TextureKey { size, format, usage, layers: layers.max(1) })
+    }
+
     fn texture_of(&self, label: &str, key: TextureKey) -> PooledTexture {
         let texture = self.pool.texture(self.device, label, key);
         self.hold(&texture);
@@ -327,6 +333,13 @@ impl<'r> Frame<'r> {
         if self.cache.enabled() {
             self.fresh.push((name, key, value));
         }
+    }
+
+    /// The first `bytes` (a multiple of 4) of `buffer` now: everything
+    /// recorded so far is submitted and waited for (a method whose next
+    /// passes depend on a count its passes made; `Profiler::read_buffer`).
+    pub fn read_now(&mut self, buffer: &wgpu::Buffer, bytes: u32) -> Result<Vec<u8>> {
+        self.profiler.read_buffer(buffer, bytes)
     }
 
     /// Sets a stat (counts that explain the cost).

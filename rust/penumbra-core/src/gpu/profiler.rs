@@ -179,6 +179,18 @@ impl<'c> Profiler<'c> {
         &mut self.encoder
     }
 
+    /// Copies the first `bytes` (a multiple of 4) of `source` out, submits
+    /// everything recorded so far and waits for it: what a method that
+    /// decides its next passes from a GPU result (an occlusion-query count)
+    /// reads in the middle of a render. Pass timings are unaffected: GPU
+    /// timestamps resolve at the end, CPU-clocked passes were waited for.
+    pub fn read_buffer(&mut self, source: &wgpu::Buffer, bytes: u32) -> Result<Vec<u8>> {
+        let pending = crate::gpu::readback::copy_buffer(&self.ctx.device, self.pool, &mut self.encoder, source, bytes);
+        self.flush()?;
+        let mut out = crate::gpu::readback::map_all(self.ctx, std::slice::from_ref(&pending))?;
+        Ok(out.pop().unwrap_or_default())
+    }
+
     fn flush(&mut self) -> Result<()> {
         let encoder = std::mem::replace(&mut self.encoder, Self::new_encoder(self.ctx));
         self.ctx.queue.submit([encoder.finish()]);

@@ -64,8 +64,21 @@ impl ScreenPass {
         bind_group: &wgpu::BindGroup,
         timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
+        self.dispatch_size(encoder, entry, bind_group, ctx.size, timestamps);
+    }
+
+    /// Runs entry point `entry` once per texel of a `size` image (a pass at
+    /// another resolution than the camera's, which maps texels to pixels itself).
+    pub fn dispatch_size(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        entry: &str,
+        bind_group: &wgpu::BindGroup,
+        size: (u32, u32),
+        timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
         let pipeline = &self.pipelines.iter().find(|(e, _)| *e == entry).unwrap_or_else(|| panic!("{}: no entry point {entry}", self.label)).1;
-        layout::dispatch_per_pixel_writes(encoder, self.label, pipeline, bind_group, ctx.size, timestamps);
+        layout::dispatch_per_pixel_writes(encoder, self.label, pipeline, bind_group, size, timestamps);
     }
 
     /// Binds `resources` and runs the first entry point: the whole of a

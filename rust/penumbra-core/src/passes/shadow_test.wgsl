@@ -48,7 +48,7 @@ fn map_point_depth(ls: LightSpace, map: texture_depth_2d_array, m: MapPoint) -> 
     if (!layer_active(ls, m.layer)) {
         return ls.depth.y;
     }
-    return textureLoad(map, map_texel(textureDimensions(map), m), m.layer, 0) * ls.depth.y;
+    return textureLoad(map, map_texel(textureDimensions(map), m), map_layer(ls, m.layer), 0) * ls.depth.y;
 }
 
 // World-unit depth stored in a linear-depth map at the texel over `q`.
@@ -65,4 +65,25 @@ fn shadow_test_visibility(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f3
     }
     let r = biased_receiver(t, p, n, cos_theta);
     return select(0.0, 1.0, r.w <= map_depth(t, map, r.xyz));
+}
+
+// Hard visibility of the light centre through the comparison sampler `cmp`:
+// with linear filtering, the hardware's 2x2 bilinear percentage-closer
+// filter around the receiver's texel (Schwarzler et al. 3.4.3), with the
+// receiver biased as in `shadow_test_visibility`.
+fn shadow_test_visibility_filtered(t: ShadowTest, map: texture_depth_2d_array, cmp: sampler_comparison, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let cos_theta = light_cosine(t, p, n);
+    if (cos_theta <= 0.0) {
+        return 0.0;
+    }
+    let r = biased_receiver(t, p, n, cos_theta);
+    let ls = t.light_space;
+    let m = light_map_point(ls, r.xyz);
+    // A cube face that was not rendered holds no occluder.
+    if (!layer_active(ls, m.layer)) {
+        return 1.0;
+    }
+    // Maps store depth / far; beyond the far plane only drawn texels hide.
+    let reference = min(r.w / ls.depth.y, 1.0);
+    return textureSampleCompareLevel(map, cmp, m.coords / ls.depth.z, map_layer(ls, m.layer), reference);
 }

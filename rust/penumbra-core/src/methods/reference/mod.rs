@@ -17,6 +17,15 @@
 //!   weights (Herf 4.2, 4.5.1, as for a planar light). From a receiver off the
 //!   disk's axis the disk is an ellipse, not the sphere's circle, so this
 //!   converges to a slightly different visibility (measured in the README).
+//! - `cap`: one stratified grid uniform over the cap of the sphere that any
+//!   point of the scene can see, weighted per receiver by solid angle as
+//!   `sphere` is: the domain method `adaptive` subdivides, so that
+//!   `n_samples = 289, sampling = "cap", jitter = False` is the paper's
+//!   ground truth of 17 x 17 regular samples (Schwarzler 4.1) and exactly
+//!   the full grid of `adaptive` at `max_depth = 4`.
+//!
+//! `jitter = False` puts each sample at the centre of its stratum: a
+//! regular grid.
 //!
 //! Each sample gets its own fitted shadow map and the shadow-map test of
 //! `hard`, accumulated (weighted sum and sum of weights) into one buffer
@@ -43,15 +52,48 @@ use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 pub enum LightSampling {
     Sphere,
     Disk,
+    Cap,
 }
 
 impl LightSampling {
-    pub const NAMES: [&'static str; 2] = ["sphere", "disk"];
+    pub const NAMES: [&'static str; 3] = ["sphere", "disk", "cap"];
 
     pub fn name(self) -> &'static str {
         match self {
             LightSampling::Sphere => "sphere",
             LightSampling::Disk => "disk",
+            LightSampling::Cap => "cap",
+        }
+    }
+
+    fn parse(name: &str) -> Self {
+        match name {
+            "disk" => LightSampling::Disk,
+            "cap" => LightSampling::Cap,
+            _ => LightSampling::Sphere,
+        }
+    }
+}
+
+/// Where each sample lies in its stratum: jittered (fixed by a seed) or at its centre.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Strata {
+    Jittered(u64),
+    Centred,
+}
+
+impl From<u64> for Strata {
+    fn from(seed: u64) -> Self {
+        Strata::Jittered(seed)
+    }
+}
+
+impl Strata {
+    /// Another, uncorrelated jitter for a second set of samples.
+    fn other(self) -> Self {
+        match self {
+            Strata::Jittered(seed) => Strata::Jittered(seed ^ 0xA5A5_5A5A),
+            Strata::Centred => Strata::Centred,
         }
     }
 }
@@ -62,12 +104,13 @@ pub struct ReferenceParams {
     pub n_samples: u32,
     pub seed: u64,
     pub sampling: LightSampling,
+    pub jitter: bool,
 }
 
 
 /// SplitMix64: a small, well-mixed generator; the samples only need to be
 /// deterministic for a seed and uncorrelated across cells.
-struct SplitMix(u64);
+pub(crate) struct SplitMix(u64);
 
 impl SplitMix {
     fn next_f64(&mut self) -> f64 {
@@ -81,7 +124,7 @@ impl SplitMix {
 
 /// Shirley and Chiu's concentric map from the unit square to the unit disk:
 /// area-preserving, so a stratified square stays stratified on the disk.
-fn concentric_disk(u: DVec2) -> DVec2 {
+pub fn concentric_disk(u: DVec2) -> DVec2 {
     let a = 2.0 * u - DVec2::ONE;
     if a == DVec2::ZERO {
         return DVec2::ZERO;
@@ -94,22 +137,43 @@ fn concentric_disk(u: DVec2) -> DVec2 {
     DVec2::new(r * phi.cos(), r * phi.sin())
 }
 
-/// A stratified jittered grid of at least `n` points in the unit square
-/// (Herf 4.5.1): `ceil(sqrt(n))` columns, as many rows as needed.
-fn jittered_grid(n: u32, seed: u64) -> Vec<DVec2> {
+/// A stratified grid of at least `n` points in the unit square (Herf
+/// 4.5.1): `ceil(sqrt(n))` columns, as many rows as needed, each point
+/// jittered in its cell or at its centre.
+fn jittered_grid(n: u32, strata: impl Into<Strata>) -> Vec<DVec2> {
     let columns = (n as f64).sqrt().ceil().max(1.0) as u32;
     let rows = n.div_ceil(columns);
-    let mut rng = SplitMix(seed ^ 0x005E_ED0F_9E37);
+    let mut rng = match strata.into() {
+        Strata::Jittered(seed) => Some(SplitMix(seed ^ 0x005E_ED0F_9E37)),
+        Strata::Centred => None,
+    };
+    let mut offset = || rng.as_mut().map_or(0.5, SplitMix::next_f64);
     let mut out = Vec::with_capacity((columns * rows) as usize);
     for j in 0..rows {
         for i in 0..columns {
-            out.push(DVec2::new(
-                (i as f64 + rng.next_f64()) / columns as f64,
-                (j as f64 + rng.next_f64()) / rows as f64,
-            ));
+            let x = (i as f64 + offset()) / columns as f64;
+            let y = (j as f64 + offset()) / rows as f64;
+            out.push(DVec2::new(x, y));
         }
     }
     out
+}
+
+/// The point `u` of the unit square on the unit sphere's cap around `axis`
+/// (unit) of polar angle `acos(cos_max)`, `cos_max` in [-1, 0]: Shirley and
+/// Chiu's concentric map onto the unit disk, then Lambert's azimuthal map
+/// `z = 1 - rho^2 (1 - cos_max)`. Both preserve area, so a stratified grid
+/// of the square is stratified and uniform over the cap. Returns the unit
+/// normal (the point on the unit sphere).
+pub fn cap_normal(u: DVec2, axis: DVec3, cos_max: f64) -> DVec3 {
+    let (e1, e2) = axis.any_orthonormal_pair();
+    let d = concentric_disk(u);
+    let z = 1.0 - d.length_squared().min(1.0) * (1.0 - cos_max);
+    // sin(theta)^2 = (1 - z)(1 + z) = rho^2 (1 - cos_max)(1 + z), and d / rho
+    // is the azimuth's unit vector: the tangential part is d times
+    // sqrt((1 - cos_max)(1 + z)), with no division (finite at the pole).
+    let scale = ((1.0 - cos_max) * (1.0 + z)).max(0.0).sqrt();
+    (axis * z + (e1 * d.x + e2 * d.y) * scale).normalize()
 }
 
 /// One light sample: its position; for `sphere` sampling the sphere's outward
@@ -126,12 +190,12 @@ pub struct LightSample {
 /// Stratified jittered points on the disk of `radius` around `center`
 /// perpendicular to `axis` (a unit vector towards the scene). A radius of 0
 /// gives the centre once.
-pub fn light_samples(center: DVec3, radius: f64, axis: DVec3, n: u32, seed: u64) -> Vec<DVec3> {
+pub fn light_samples(center: DVec3, radius: f64, axis: DVec3, n: u32, strata: impl Into<Strata>) -> Vec<DVec3> {
     if radius == 0.0 {
         return vec![center];
     }
     let (e1, e2) = axis.any_orthonormal_pair();
-    jittered_grid(n, seed)
+    jittered_grid(n, strata)
         .into_iter()
         .map(|u| {
             let d = concentric_disk(u) * radius;
@@ -165,10 +229,11 @@ pub fn light_samples(center: DVec3, radius: f64, axis: DVec3, n: u32, seed: u64)
 /// p_c = max(cos_a, 0) / pi and p_u = 1 / (2 pi (1 - cos_max)) per unit area
 /// of the unit sphere: the weighted sum of the solid-angle factors estimates
 /// the solid angle each receiver sees. A radius of 0 gives the centre once.
-pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: u32, seed: u64) -> Vec<LightSample> {
+pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: u32, strata: impl Into<Strata>) -> Vec<LightSample> {
     if radius == 0.0 {
         return vec![LightSample { position: center, normal: None, weight: 1.0 }];
     }
+    let strata = strata.into();
     let cos_max = cos_max.clamp(-1.0, 0.0);
     let (e1, e2) = axis.any_orthonormal_pair();
     // A light inside the scene's bounding sphere is seen from every side: no
@@ -176,8 +241,8 @@ pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: 
     // beside or above it with few samples. Half are then uniform.
     let surrounded = cos_max <= -1.0;
     let n_u = if surrounded { n.div_ceil(2).max(1) } else { n.div_ceil(8).max(1) };
-    let cosine = if n > n_u { jittered_grid(n - n_u, seed) } else { Vec::new() };
-    let uniform = jittered_grid(n_u, seed ^ 0xA5A5_5A5A);
+    let cosine = if n > n_u { jittered_grid(n - n_u, strata) } else { Vec::new() };
+    let uniform = jittered_grid(n_u, strata.other());
     let (count_c, count_u) = (cosine.len() as f64, uniform.len() as f64);
     let frame = |d: DVec2, z: f64, scale: f64| (axis * z + (e1 * d.x + e2 * d.y) * scale).normalize();
     let normals = cosine
@@ -187,14 +252,7 @@ pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: 
             // |d| <= 1 up to rounding; the lift is unit length by construction.
             frame(d, (1.0 - d.length_squared()).max(0.0).sqrt(), 1.0)
         })
-        .chain(uniform.into_iter().map(|u| {
-            let d = concentric_disk(u);
-            let z = 1.0 - d.length_squared().min(1.0) * (1.0 - cos_max);
-            // sin(theta)^2 = (1 - z)(1 + z) = rho^2 (1 - cos_max)(1 + z), and d / rho
-            // is the azimuth's unit vector: the tangential part is d times
-            // sqrt((1 - cos_max)(1 + z)), with no division (finite at the pole).
-            frame(d, z, ((1.0 - cos_max) * (1.0 + z)).max(0.0).sqrt())
-        }));
+        .chain(uniform.into_iter().map(|u| cap_normal(u, axis, cos_max)));
     // 1 - cos_max >= 1 (the cap holds a hemisphere): p_u is finite.
     let p_u = 1.0 / (std::f64::consts::TAU * (1.0 - cos_max));
     normals
@@ -205,6 +263,38 @@ pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: 
             LightSample { position: center + normal * radius, normal: Some(normal), weight: 1.0 / density }
         })
         .collect()
+}
+
+/// Stratified points uniform over the cap of the light's sphere around
+/// `axis` of polar angle `acos(cos_max)` (`cap_normal`), one grid of at
+/// least `n` cells, with their normals and the inverse of their density
+/// (the shader multiplies it by the solid-angle factor, as for `sphere`).
+/// A radius of 0 gives the centre once.
+pub fn cap_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: u32, strata: impl Into<Strata>) -> Vec<LightSample> {
+    if radius == 0.0 {
+        return vec![LightSample { position: center, normal: None, weight: 1.0 }];
+    }
+    let cos_max = cos_max.clamp(-1.0, 0.0);
+    let grid = jittered_grid(n, strata);
+    // 1 - cos_max >= 1: the density (per unit area of the unit sphere) is finite.
+    let weight = std::f64::consts::TAU * (1.0 - cos_max) / grid.len() as f64;
+    grid.into_iter()
+        .map(|u| {
+            let normal = cap_normal(u, axis, cos_max);
+            LightSample { position: center + normal * radius, normal: Some(normal), weight }
+        })
+        .collect()
+}
+
+/// The direction from the light's centre to the centre of the scene's
+/// bounding box (straight down when they coincide) and the cosine of the
+/// visible cap around it (`visible_cap_cos`): where the light's samples lie.
+pub fn scene_cap(scene: &crate::scene::PreparedScene, center: DVec3) -> (DVec3, f64) {
+    let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
+    let offset = scene_center - center;
+    let axis = offset.try_normalize().unwrap_or(DVec3::NEG_Y);
+    let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
+    (axis, visible_cap_cos(offset.length(), bound))
 }
 
 /// The cosine of the polar angle (around `axis`, the direction from the light
@@ -253,8 +343,9 @@ impl Method for ReferenceShadows {
                 "sampling",
                 "sphere",
                 &LightSampling::NAMES,
-                "samples on the visible sphere (converges to the ground truth) or on Herf's facing disk",
+                "samples on the visible sphere (converges to the ground truth), on Herf's facing disk, or one grid uniform over the visible cap (adaptive's domain)",
             ),
+            ParamSpec::bool("jitter", true, "jitter each sample in its stratum (False: at its centre, a regular grid)"),
         ]);
         specs
     }
@@ -264,7 +355,8 @@ impl Method for ReferenceShadows {
             shadow: ShadowMapSettings::from_params(p),
             n_samples: p.int("n_samples") as u32,
             seed: p.int("seed") as u64,
-            sampling: if p.choice("sampling") == "disk" { LightSampling::Disk } else { LightSampling::Sphere },
+            sampling: LightSampling::parse(p.choice("sampling")),
+            jitter: p.bool("jitter"),
         })
     }
 
@@ -294,20 +386,16 @@ impl Method for ReferenceShadows {
         let used = frame.pass("light_samples", |ctx, encoder, timestamps| -> Result<(usize, usize, usize)> {
             let (center, radius) = (ctx.light.center, ctx.light.radius);
             let scene = ctx.prepared;
-            let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
-            let offset = scene_center - center;
-            let axis = offset.try_normalize().unwrap_or(DVec3::NEG_Y);
+            let (axis, cos_max) = scene_cap(scene, center);
+            let strata = if params.jitter { Strata::Jittered(params.seed) } else { Strata::Centred };
             let samples = match params.sampling {
                 LightSampling::Disk => {
-                    let points = light_samples(center, radius, axis, params.n_samples, params.seed);
+                    let points = light_samples(center, radius, axis, params.n_samples, strata);
                     let weight = 1.0 / points.len() as f64;
                     points.into_iter().map(|position| LightSample { position, normal: None, weight }).collect()
                 }
-                LightSampling::Sphere => {
-                    let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
-                    let cos_max = visible_cap_cos(offset.length(), bound);
-                    sphere_samples(center, radius, axis, cos_max, params.n_samples, params.seed)
-                }
+                LightSampling::Sphere => sphere_samples(center, radius, axis, cos_max, params.n_samples, strata),
+                LightSampling::Cap => cap_samples(center, radius, axis, cos_max, params.n_samples, strata),
             };
             let points: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
             let (w, h) = ctx.size;
