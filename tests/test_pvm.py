@@ -82,7 +82,8 @@ def test_no_nan_or_inf_from_radius_zero_to_larger_than_the_casters(renderer: pen
             assert result.stats["penumbra_volumes"] == 0 and result.stats["pixels_in_volume"] == 0
             np.testing.assert_array_equal(result.visibility, renderer.render(scene, "hard").visibility)
         else:
-            assert result.stats["penumbra_volumes"] == 2 * (result.stats["silhouette_edges"] - result.stats["light_parallel_edges"])
+            s = result.stats
+            assert s["penumbra_volumes"] == 2 * (s["silhouette_edges"] - s["light_parallel_edges"] - s["hidden_silhouette_edges"])
 
 
 def test_penumbra_widens_with_the_light_radius(renderer: penumbra.Renderer) -> None:

@@ -42,7 +42,7 @@ def test_every_scene_renders_with_its_passes_stats_and_intermediates(renderer: p
             assert np.isfinite(result.images[key]).all(), key
         assert result.images["pvmf_edge_distance"].shape == (512, 512)
         s = result.stats
-        assert s["mask_quads"] == 2 * (s["silhouette_edges"] - s["light_parallel_edges"]) > 0
+        assert s["mask_quads"] == 2 * (s["silhouette_edges"] - s["light_parallel_edges"] - s["hidden_silhouette_edges"]) > 0
         # Filtered: masked pixels plus those failing the test outside every volume (5.2).
         assert 0 < s["masked_pixels"] <= s["filtered_pixels"] == int(result["pvmf_blur_mask"].sum())
         assert s["blurred_pixels"] == s["filtered_pixels"]

@@ -24,7 +24,7 @@ import trimesh
 from penumbra.errors import MeshError, ParameterError
 from penumbra.scene import Camera, Mesh, Scene, SphereLight
 
-__all__ = ["names", "get", "DEFAULT", "ground_plane", "ground_slab", "sphere", "box", "from_mesh"]
+__all__ = ["names", "get", "DEFAULT", "SETUPS", "CLOSED_MESHES", "SUITE_SETUPS", "ground_plane", "ground_slab", "sphere", "box", "from_mesh", "real_mesh_suite"]
 
 DEFAULT = "sphere_on_plane"
 _WIDTH, _HEIGHT = 512, 512
@@ -155,9 +155,26 @@ def _obj_with_relative_indices(path: str) -> trimesh.Trimesh | None:
     return trimesh.Trimesh(np.array(vertices, dtype=np.float64).reshape(-1, 3), np.array(faces, dtype=np.int64).reshape(-1, 3), process=False)
 
 
-def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5) -> Scene:
-    """A scene around a mesh file (anything trimesh reads): the mesh scaled to
-    a 2.5-unit bounding box, resting on the ground plane, with the default light and camera."""
+# The ways from_mesh places a mesh, its light and camera (see from_mesh).
+SETUPS = ("default", "close", "wide_floor")
+
+
+def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5, setup: str = "default") -> Scene:
+    """A scene around a mesh file (anything trimesh reads), resting on a
+    closed ground slab; ``setup`` says how:
+
+    - ``"default"``: the mesh scaled to a 2.5-unit bounding box on the
+      10 x 10 ground slab, with the built-in scenes' light and camera.
+    - ``"close"``: the same scene seen from above, framed on the mesh and
+      its shadow (the view the real-mesh accuracy tests use).
+    - ``"wide_floor"``: the mesh scaled to 1.5 units on a 6 x 6 slab with
+      the light 3 units above the floor, seen from above the floor's front:
+      a floor wider than the light is high. The light stands over the
+      floor's middle, so every floor corner lies within 60 degrees of the
+      shadow map's axis (one frustum covers at most 80 degrees today).
+    """
+    if setup not in SETUPS:
+        raise ParameterError(f"unknown setup {setup!r}; choose one of {list(SETUPS)}")
     try:
         loaded = _obj_with_relative_indices(path) or trimesh.load(path, force="mesh")
     except Exception as e:  # trimesh raises many types for unreadable files
@@ -167,10 +184,37 @@ def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_ra
     extent = float(np.max(loaded.extents))
     if not math.isfinite(extent) or extent <= 0:
         raise MeshError(f"mesh file {path!r} has a degenerate or non-finite bounding box")
-    scale = 2.5 / extent
+    size = 1.5 if setup == "wide_floor" else 2.5
+    scale = size / extent
     vertices = (np.asarray(loaded.vertices) - loaded.bounds.mean(axis=0)) * scale
     vertices[:, 1] -= vertices[:, 1].min() - 1e-3
     name = str(path).rsplit("/", 1)[-1]
     mesh = Mesh(vertices, np.asarray(loaded.faces), albedo=0.7, object_id=1, name=name)
-    camera = _camera().with_size(width, height)
+    if setup == "wide_floor":
+        light = SphereLight(center=(0.4, 3.0, 0.3), radius=light_radius, intensity=20.0)
+        camera = Camera(eye=(0.0, 4.0, 4.4), target=(-0.2, 0.0, -0.2), fov_y=55.0, width=width, height=height)
+        return Scene([ground_slab(half_size=3.0), mesh], light, camera, name=name)
+    if setup == "close":
+        camera = Camera(eye=(1.2, 6.5, 5.0), target=(-0.7, 0.4, -0.6), fov_y=50.0, width=width, height=height)
+    else:
+        camera = _camera().with_size(width, height)
     return Scene([ground_slab(), mesh], _light(light_radius), camera, name=name)
+
+
+# The closed 2-manifold meshes of ../shared/meshes (its SOURCES.md), which the
+# real-mesh accuracy suite and benchmarks/real_meshes.py render.
+CLOSED_MESHES = ("cube.obj", "spot.obj", "teapot-mcguire-closed.obj")
+# (setup, light radius) per real-mesh scene: two radii seen close, and the wide floor.
+SUITE_SETUPS = (("close", 0.3), ("close", 0.8), ("wide_floor", 0.3))
+
+
+def real_mesh_suite(folder: str, *, width: int = 160, height: int = 160, meshes: tuple[str, ...] = CLOSED_MESHES) -> dict[str, Scene]:
+    """The real-mesh scenes of the accuracy suite: every mesh of ``meshes``
+    (files in ``folder``) in every (setup, light radius) of ``SUITE_SETUPS``,
+    by name ``"<file> <setup> r=<radius>"``."""
+    out = {}
+    for mesh in meshes:
+        for setup, radius in SUITE_SETUPS:
+            scene = from_mesh(f"{folder}/{mesh}", width=width, height=height, light_radius=radius, setup=setup)
+            out[f"{mesh} {setup} r={radius}"] = scene
+    return out

@@ -435,6 +435,7 @@ impl Renderer {
                 stats.insert("penumbra_volumes".into(), s.volume_quads as i64);
                 stats.insert("silhouette_junction_vertices".into(), s.junction_vertices as i64);
                 stats.insert("light_parallel_edges".into(), s.light_parallel_edges as i64);
+                stats.insert("hidden_silhouette_edges".into(), s.hidden_edges as i64);
                 stats.insert("silhouette_cache_hits".into(), cache_hits as i64);
                 counters = Some((&pvm_frame.counter, &["pixels_in_volume"]));
                 intermediates.push(Intermediate::depth("pvm_volume_depth", &pvm_frame.volumes.volume_depth));
@@ -502,6 +503,7 @@ impl Renderer {
                 stats.insert("silhouette_edges".into(), s.silhouette_edges as i64);
                 stats.insert("mask_quads".into(), s.mask_quads as i64);
                 stats.insert("light_parallel_edges".into(), s.light_parallel_edges as i64);
+                stats.insert("hidden_silhouette_edges".into(), s.hidden_edges as i64);
                 stats.insert("silhouette_cache_hits".into(), cache_hits as i64);
                 counters = Some((&pvmf_counters, &pvmf::COUNTERS));
                 intermediates.push(Intermediate::depth("pvmf_mask_depth", &pvmf_mask.mask_depth));

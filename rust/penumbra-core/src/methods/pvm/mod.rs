@@ -30,7 +30,7 @@ use crate::passes::shading::VISIBILITY_FORMAT;
 use crate::passes::volumes::VolumePass;
 use crate::scene::PreparedScene;
 use crate::pass_cache::PassKey;
-pub use crate::silhouettes::{silhouette, OpenEdges, SilhouetteCache, SilhouetteEdge};
+pub use crate::silhouettes::{silhouette, OpenEdges, Repairs, SilhouetteCache, SilhouetteEdge};
 
 pub mod geometry;
 pub use geometry::{penumbra_volumes, VolumeStats, VolumeVertex};
@@ -43,7 +43,13 @@ pub struct PvmParams {
     /// The 3k^2 - 2k^3 interpolant of 4.2.
     pub falloff: bool,
     pub open_edges: OpenEdges,
+    /// Departures from the paper for real meshes (`Repairs`).
+    pub repairs: Repairs,
 }
+
+/// The values of `repairs`: cumulative, in the order docs/real_meshes.md
+/// measures them; "all" (the default) adds the horizon to the last.
+pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "cone", "cone+hidden", "cone+hidden+centre"];
 
 impl PvmParams {
     pub fn read(r: &mut ParamReader<'_>) -> Result<Self> {
@@ -51,6 +57,7 @@ impl PvmParams {
             shadow: ShadowMapSettings::read(r)?,
             falloff: r.bool("falloff", true)?,
             open_edges: OpenEdges::parse(r.choice("open_edges", "error", &OpenEdges::NAMES)?),
+            repairs: Repairs::parse(r.choice("repairs", "all", &REPAIR_LEVELS)?),
         })
     }
 
@@ -58,7 +65,12 @@ impl PvmParams {
         let mut out = self.shadow.effective();
         out.insert("falloff".into(), ParamValue::Bool(self.falloff));
         out.insert("open_edges".into(), ParamValue::Str(self.open_edges.name().into()));
+        out.insert("repairs".into(), ParamValue::Str(self.repairs_name().into()));
         out
+    }
+
+    fn repairs_name(&self) -> &'static str {
+        REPAIR_LEVELS.iter().copied().find(|&n| Repairs::parse(n) == self.repairs).unwrap_or("all")
     }
 }
 
@@ -85,11 +97,12 @@ pub struct PvmFrame {
 }
 
 /// What pass 2 reads besides the geometry: the light, the frustum, the map
-/// size and `open_edges` (appended to the pass-cache key).
+/// size, `open_edges` and the geometric repairs (appended to the pass-cache key).
 pub fn volumes_key(params: &PvmParams, frustum: &LightFrustum, (l, r): (DVec3, f64), key: &mut PassKey) {
     key.f64s(&l.to_array())
         .f64s(&[r])
         .bytes(params.open_edges.name().as_bytes())
+        .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden)])
         .frustum(frustum)
         .u32(params.shadow.map_size);
 }
@@ -162,12 +175,17 @@ impl PenumbraVolumeMaps {
         let mut vertices = vertices;
         // A point light has no penumbra: skip the volumes entirely.
         if r > 0.0 {
-            let (edges, hits) = silhouettes.edges(scene, l, params.open_edges)?;
-            cache_hits = hits;
+            let silhouette = if params.repairs.hidden {
+                silhouettes.seen_from_light(scene, l, params.open_edges)?
+            } else {
+                let (edges, cache_hits) = silhouettes.edges(scene, l, params.open_edges)?;
+                crate::silhouettes::SceneSilhouette { edges, cache_hits, hidden_edges: 0 }
+            };
+            cache_hits = silhouette.cache_hits;
             let reach = 4.0 * frustum.far as f64 + 4.0 * r;
-            let (v, s) = penumbra_volumes(&edges, l, r, reach);
+            let (v, s) = penumbra_volumes(&silhouette.edges, l, r, reach, params.repairs.cone);
             vertices = v;
-            stats = s;
+            stats = VolumeStats { hidden_edges: silhouette.hidden_edges, silhouette_edges: s.silhouette_edges + silhouette.hidden_edges, ..s };
         }
         let edge_usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let edge0 = layout::create_texture(device, "pvm::edge0_map", (map, map), EDGE_FORMAT, edge_usage);
@@ -191,7 +209,7 @@ impl PenumbraVolumeMaps {
         visibility: &wgpu::Texture,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
-        let flags = u32::from(params.falloff);
+        let flags = u32::from(params.falloff) | (u32::from(params.repairs.centre) << 1) | (u32::from(params.repairs.horizon) << 2);
         let uniforms = layout::parameter_buffer(device, "pvm::visibility_uniforms", &params.shadow.uniform(frustum, light.0, light.1, flags));
         let v = &frame.volumes;
         let views = [shadow_map, &v.volume_depth, &v.edge0, &v.edge1, visibility, &frame.membership].map(layout::view);

@@ -11,22 +11,14 @@
 @group(0) @binding(3) var volume_depth: texture_depth_2d;
 @group(0) @binding(4) var edge0_map: texture_2d<f32>;
 @group(0) @binding(5) var edge1_map: texture_2d<f32>;
-// mode.y bit 0: falloff.
+// mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon".
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var<storage, read_write> pixels_in_volume: atomic<u32>;
 
-// Eq. 4.1 and 4.2: the fraction of a disk of radius r whose centre lies at
-// signed distance s from a line, on the far side of the line from the centre
-// when s > 0 (and on the centre's side when s < 0). Continuous in s, 1/2 at 0.
-fn disk_fraction(s: f32, r: f32) -> f32 {
-    let c = clamp(s / r, -1.0, 1.0);
-    // a = acos(s/r) r^2 / 2 - s sqrt(r^2 - s^2) / 2; k = 2a / (pi r^2), in units of r.
-    let a = 0.5 * acos(c) - 0.5 * c * sqrt(max(1.0 - c * c, 0.0));
-    return clamp(2.0 * a / PI, 0.0, 1.0);
-}
-
+// k of Eq. 4.2 for the silhouette edge h0-h1 and the receiver p
+// (disk_fraction, Eq. 4.1, is in shaders/shadow_test.wgsl).
 fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
     let r = pvm.center.w;
     let l = pvm.center.xyz;
@@ -45,13 +37,14 @@ fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
     // occluder: the visible part of the disk is the part beyond the plane from
     // an occluded centre, so Eq. 4.1 applies with this s.
     let s = -(dot(n, l) - dot(n, h0));
-    let k = disk_fraction(s, r);
-    if ((pvm.mode.y & 1u) != 0u) {
-        // Parker et al.'s sinusoidal falloff, as the Bernstein interpolant (4.2).
-        return k * k * (3.0 - 2.0 * k);
-    }
-    return k;
+    return disk_fraction(s, r);
 }
+
+// How far (in k) a volume's visibility may disagree with the shadow-map test
+// at the light's centre before the volume is taken for another edge's: the
+// test and the volume map are rasterised separately, so within a texel or
+// two of the hard-shadow boundary they disagree by design.
+const CENTRE_TOLERANCE: f32 = 0.1;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -67,19 +60,54 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let p = textureLoad(gbuffer_position, px, 0).xyz;
         let n = nt.xyz;
         let cos_theta = light_cosine(pvm, p, n);
-        // Centre below the surface's horizon: the surface itself hides it.
+        let r = pvm.center.w;
+        let horizon = (pvm.mode.y & 4u) != 0u && r > 0.0;
+        // Repair "horizon" (beyond the paper, which takes the light's centre
+        // for the surface's horizon test): the fraction of the light above
+        // the receiver's tangent plane, by Eq. 4.1 with that plane as the
+        // cutting plane. It bounds the visibility; a receiver whose centre
+        // lies below its horizon sees that fraction of the light (other
+        // occluders of that sliver are not looked for: the shadow map from
+        // the centre cannot tell them from the receiver's own object).
+        var k_h = 1.0;
+        if (horizon) {
+            k_h = horizon_fraction(pvm, p, n);
+        }
+        // Centre below the surface's horizon: the surface itself hides it
+        // (and only the horizon's sliver of the light can be seen).
         if (cos_theta > 0.0) {
             let q = biased_receiver(pvm, p, n, cos_theta);
+            let centre_lit = q.w <= map_depth(pvm, shadow_map, q.xyz);
+            v = select(0.0, 1.0, centre_lit);
             // Listing 4.2: in a volume when the PVDM is nearer the light than the pixel.
             if (map_depth(pvm, volume_depth, q.xyz) < q.w) {
                 let size_map = vec2<i32>(textureDimensions(edge0_map));
                 let t = clamp(vec2<i32>(floor(light_map_coords(pvm.light_space, q.xyz))), vec2<i32>(0), size_map - 1);
-                v = volume_visibility(p, textureLoad(edge0_map, t, 0).xyz, textureLoad(edge1_map, t, 0).xyz);
+                var k = volume_visibility(p, textureLoad(edge0_map, t, 0).xyz, textureLoad(edge1_map, t, 0).xyz);
+                // Repair "centre" (beyond the paper): the volume nearest the
+                // light at this texel need not be the one that shadows p
+                // (4.3's overlap): a far edge's inner volume reaching past the
+                // occluder's other side, or another edge's volume over an
+                // umbra. k >= 1/2 means the centre is visible and k < 1/2 that
+                // it is hidden; where the shadow map's test at the centre says
+                // otherwise, the volume belongs to another edge and the test
+                // decides alone.
+                let agrees = select(k <= 0.5 + CENTRE_TOLERANCE, k >= 0.5 - CENTRE_TOLERANCE, centre_lit);
+                if ((pvm.mode.y & 2u) == 0u || agrees) {
+                    if ((pvm.mode.y & 1u) != 0u) {
+                        // Parker et al.'s sinusoidal falloff, as the Bernstein interpolant (4.2).
+                        k = k * k * (3.0 - 2.0 * k);
+                    }
+                    v = k;
+                }
                 inside = 1.0;
                 atomicAdd(&pixels_in_volume, 1u);
-            } else {
-                v = select(0.0, 1.0, q.w <= map_depth(pvm, shadow_map, q.xyz));
             }
+            if (horizon) {
+                v = min(v, k_h);
+            }
+        } else if (horizon) {
+            v = k_h;
         }
     }
     textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));

@@ -30,7 +30,7 @@ use crate::light_frustum::LightFrustum;
 use crate::pass_cache::PassKey;
 use crate::methods::hard::{ShadowMapSettings, ShadowTestUniform};
 use crate::methods::pcf::{ComparisonSamplers, Filter};
-use crate::silhouettes::{OpenEdges, SilhouetteCache};
+use crate::silhouettes::{OpenEdges, Repairs, SceneSilhouette, SilhouetteCache};
 
 pub mod geometry;
 pub use geometry::{mask_volumes, MaskStats, MaskVertex, Offsets};
@@ -74,7 +74,13 @@ pub struct PvmfParams {
     /// Filter pixels that fail the shadow-map test outside every volume (5.2).
     pub filter_umbra: bool,
     pub open_edges: OpenEdges,
+    /// Departures from the paper for real meshes (`Repairs`: `hidden`, `horizon` and `distance` apply).
+    pub repairs: Repairs,
 }
+
+/// The values of `repairs`: cumulative, in the order docs/real_meshes.md
+/// measures them; "all" (the default) adds the local edge distance to the last.
+pub const REPAIR_LEVELS: [&str; 4] = ["all", "none", "hidden", "hidden+horizon"];
 
 impl PvmfParams {
     pub fn read(r: &mut ParamReader<'_>) -> Result<Self> {
@@ -101,6 +107,7 @@ impl PvmfParams {
             },
             filter_umbra: r.choice("umbra", "filter", &["filter", "skip"])? == "filter",
             open_edges: OpenEdges::parse(r.choice("open_edges", "error", &OpenEdges::NAMES)?),
+            repairs: Repairs::parse(r.choice("repairs", "all", &REPAIR_LEVELS)?),
         })
     }
 
@@ -117,6 +124,7 @@ impl PvmfParams {
         out.insert("kernel".into(), s(if self.kernel == Kernel::Square { "square" } else { "disk" }));
         out.insert("umbra".into(), s(if self.filter_umbra { "filter" } else { "skip" }));
         out.insert("open_edges".into(), s(self.open_edges.name()));
+        out.insert("repairs".into(), s(REPAIR_LEVELS.iter().copied().find(|&n| Repairs::parse(n) == self.repairs).unwrap_or("all")));
         out
     }
 }
@@ -213,6 +221,7 @@ pub fn mask_key(params: &PvmfParams, frustum: &LightFrustum, (l, r): (DVec3, f64
         .f64s(&[r, params.s_e])
         .bytes(offsets.as_bytes())
         .bytes(params.open_edges.name().as_bytes())
+        .bytes(&[u8::from(params.repairs.hidden), u8::from(params.repairs.distance)])
         .frustum(frustum)
         .u32(params.shadow.map_size);
 }
@@ -220,7 +229,7 @@ pub fn mask_key(params: &PvmfParams, frustum: &LightFrustum, (l, r): (DVec3, f64
 /// The uniform blocks of pass 3.
 fn estimate_uniforms(params: &PvmfParams, frustum: &LightFrustum, light: ([f32; 3], f32)) -> (ShadowTestUniform, SettingsUniform) {
     let test = params.shadow.uniform(frustum, light.0, light.1, 0);
-    let flags = u32::from(params.kernel == Kernel::Disk) | (u32::from(!params.filter_umbra) << 1);
+    let flags = u32::from(params.kernel == Kernel::Disk) | (u32::from(!params.filter_umbra) << 1) | (u32::from(params.repairs.horizon) << 2);
     let settings = SettingsUniform { s_p: params.s_p as f32, n_pcf: params.n_pcf, seed: params.seed as u32, flags };
     (test, settings)
 }
@@ -239,7 +248,7 @@ impl PenumbraVolumeMaskFiltering {
             "pvmf::mask_pass",
             crate::shaders::pvmf_mask(),
             ("vs_mask", "fs_mask"),
-            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32],
+            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32],
             &[DISTANCE_FORMAT],
         );
         let estimate_layout = layout::bind_group_layout(
@@ -300,11 +309,18 @@ impl PenumbraVolumeMaskFiltering {
         let (mut stats, mut cache_hits, mut vertices) = (MaskStats::default(), 0, Vec::new());
         // A point light has no penumbra: no volumes, and nothing is filtered.
         if r > 0.0 {
-            let (edges, hits) = silhouettes.edges(scene, l, params.open_edges)?;
-            cache_hits = hits;
+            let silhouette = if params.repairs.hidden {
+                silhouettes.seen_from_light(scene, l, params.open_edges)?
+            } else {
+                let (edges, cache_hits) = silhouettes.edges(scene, l, params.open_edges)?;
+                SceneSilhouette { edges, cache_hits, hidden_edges: 0 }
+            };
+            cache_hits = silhouette.cache_hits;
             // Beyond the far plane from any moved point (they lie between l and the edges).
             let reach = 4.0 * frustum.far as f64 + 4.0 * r;
-            (vertices, stats) = mask_volumes(&edges, l, r, params.s_e, params.offsets, reach);
+            (vertices, stats) = mask_volumes(&silhouette.edges, l, r, params.s_e, params.offsets, reach, params.repairs.distance);
+            stats.hidden_edges = silhouette.hidden_edges;
+            stats.silhouette_edges += silhouette.hidden_edges;
         }
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
         // d_e = 0 (the clear value) marks texels without a volume.
