@@ -24,6 +24,8 @@ CHOICES = {
     "umbra": ["filter", "skip"],
     "open_edges": ["error", "silhouette"],
     "sampling": ["grid", "poisson", "random"],
+    # Every method with repairs has these two levels (tests/test_real_meshes.py keys the rest).
+    "repairs": ["all", "none"],
 }
 
 

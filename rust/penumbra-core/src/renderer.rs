@@ -424,7 +424,13 @@ impl Renderer {
                         (volumes, hits)
                     }
                 };
-                pvm_frame = PvmFrame::new(device, volumes, size);
+                pvm_frame = {
+                    let mut frame = PvmFrame::new(device, volumes, size);
+                    if options.intermediates {
+                        frame.edge_maps = Some(self.pvm.record_edge_maps(device, profiler.encoder(), &frame.volumes));
+                    }
+                    frame
+                };
                 profiler.pass("visibility", |encoder, ts| {
                     self.pvm.record_visibility(
                         device, encoder, params, &pvm_frame, &gbuffer, &shadow_map, frustum, light, &visibility, ts,
@@ -439,8 +445,10 @@ impl Renderer {
                 stats.insert("silhouette_cache_hits".into(), cache_hits as i64);
                 counters = Some((&pvm_frame.counter, &["pixels_in_volume"]));
                 intermediates.push(Intermediate::depth("pvm_volume_depth", &pvm_frame.volumes.volume_depth));
-                intermediates.push(Intermediate::color("pvm_edge0", &pvm_frame.volumes.edge0, 3));
-                intermediates.push(Intermediate::color("pvm_edge1", &pvm_frame.volumes.edge1, 3));
+                if let Some((edge0, edge1)) = &pvm_frame.edge_maps {
+                    intermediates.push(Intermediate::color("pvm_edge0", edge0, 3));
+                    intermediates.push(Intermediate::color("pvm_edge1", edge1, 3));
+                }
                 intermediates.push(Intermediate::color("pvm_in_volume", &pvm_frame.membership, 1));
             }
             MethodConfig::Pvmf(params) => {

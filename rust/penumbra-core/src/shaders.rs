@@ -44,6 +44,10 @@ pub fn pvm_volumes() -> String {
     compose(&[include_str!("methods/pvm/volumes.wgsl")])
 }
 
+pub fn pvm_edge_maps() -> String {
+    compose(&[include_str!("methods/pvm/edge_maps.wgsl")])
+}
+
 pub fn pvm() -> String {
     compose(&[COMMON, LIGHT_SPACE, SHADOW_TEST, include_str!("methods/pvm/visibility.wgsl")])
 }
@@ -92,6 +96,7 @@ pub fn all() -> Vec<(&'static str, String, &'static [&'static str])> {
             &["shaders/common.wgsl", "shaders/light_space.wgsl", "shaders/shadow_test.wgsl", "shaders/pcf.wgsl", "methods/pcss/visibility.wgsl"],
         ),
         ("pvm_volumes", pvm_volumes(), &["methods/pvm/volumes.wgsl"]),
+        ("pvm_edge_maps", pvm_edge_maps(), &["methods/pvm/edge_maps.wgsl"]),
         (
             "pvm",
             pvm(),

@@ -11,13 +11,30 @@ use glam::DVec3;
 use crate::silhouettes::SilhouetteEdge;
 
 
-/// One corner of a volume quadrilateral with the silhouette edge it comes from.
+/// One corner of a volume quadrilateral with the index (into
+/// [`VolumeGeometry::edges`]) of the silhouette edge it comes from.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct VolumeVertex {
     pub position: [f32; 3],
-    pub h0: [f32; 3],
-    pub h1: [f32; 3],
+    pub edge: u32,
+}
+
+/// The end points h0 and h1 of a silhouette edge with a volume (w unused),
+/// as the visibility pass reads them (4.1.3's edge maps, by index).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct EdgePoints {
+    pub h0: [f32; 4],
+    pub h1: [f32; 4],
+}
+
+/// Everything pass 2 renders: the quadrilaterals' corners and the edges they index.
+#[derive(Debug, Clone, Default)]
+pub struct VolumeGeometry {
+    pub vertices: Vec<VolumeVertex>,
+    pub edges: Vec<EdgePoints>,
+    pub stats: VolumeStats,
 }
 
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -132,7 +149,7 @@ fn in_light_cone(v: DVec3, dir: DVec3, d: DVec3, l: DVec3, r: f64) -> DVec3 {
 /// extruded by `reach` (beyond the light's far plane). With `cone`, every
 /// extrusion vector lies in its vertex's light cone (`in_light_cone`);
 /// without, it is the paper's plane intersection alone.
-pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, cone: bool) -> (Vec<VolumeVertex>, VolumeStats) {
+pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, cone: bool) -> VolumeGeometry {
     let mut stats = VolumeStats { silhouette_edges: edges.len(), ..Default::default() };
     let planes: Vec<Option<EdgePlanes>> = edges.iter().map(|e| edge_planes(e, l, r)).collect();
     // Loop connectivity: the incoming and outgoing edges of each vertex.
@@ -156,6 +173,7 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, 
     stats.junction_vertices = junctions.len();
 
     let mut vertices = Vec::with_capacity(edges.len() * 12);
+    let mut points = Vec::with_capacity(edges.len());
     let f = |p: DVec3| p.as_vec3().to_array();
     for (i, e) in edges.iter().enumerate() {
         let Some(own) = &planes[i] else {
@@ -180,15 +198,19 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, 
         let (a_out, a_in) = at(e.a, e.ia, true);
         let (b_out, b_in) = at(e.b, e.ib, false);
         debug_assert!(own.n.is_finite());
+        let edge = points.len() as u32;
+        let [ax, ay, az] = f(e.a);
+        let [bx, by, bz] = f(e.b);
+        points.push(EdgePoints { h0: [ax, ay, az, 1.0], h1: [bx, by, bz, 1.0] });
         for (va, vb) in [(a_out, b_out), (a_in, b_in)] {
             let quad = [e.a, e.a + va * reach, e.b + vb * reach, e.b];
             for k in [0, 1, 2, 0, 2, 3] {
-                vertices.push(VolumeVertex { position: f(quad[k]), h0: f(e.a), h1: f(e.b) });
+                vertices.push(VolumeVertex { position: f(quad[k]), edge });
             }
             stats.volume_quads += 1;
         }
     }
-    (vertices, stats)
+    VolumeGeometry { vertices, edges: points, stats }
 }
 
 #[cfg(test)]
@@ -225,7 +247,7 @@ mod tests {
             // Normal points away from the cube's centre (the occluder).
             assert!(n.dot(e.a - DVec3::new(0.0, 2.0, 0.0)) > 0.0, "{e:?}");
         }
-        let (vertices, stats) = penumbra_volumes(&edges, l, 0.5, 100.0, true);
+        let VolumeGeometry { vertices, stats, .. } = penumbra_volumes(&edges, l, 0.5, 100.0, true);
         assert_eq!(stats.junction_vertices, 0);
         assert_eq!(stats.volume_quads, 8);
         assert_eq!(vertices.len(), 8 * 6);
@@ -238,7 +260,7 @@ mod tests {
     fn outer_volume_leans_outwards_and_inner_inwards() {
         let l = DVec3::new(0.0, 6.0, 0.0);
         let edges = silhouette(&cube(), l, false);
-        let (vertices, _) = penumbra_volumes(&edges, l, 0.5, 10.0, true);
+        let vertices = penumbra_volumes(&edges, l, 0.5, 10.0, true).vertices;
         // Far corners: outer quads spread beyond the hard shadow's, inner ones inside it.
         let hard_spread = |y: f32| 0.5 * (6.0 - y) / (6.0 - 2.5);
         let (outer, inner) = vertices.split_at(6);
@@ -259,11 +281,12 @@ mod tests {
             SilhouetteEdge { a: DVec3::new(1.0, 1.0, 0.0), b: DVec3::new(2.0, 1.0, 0.0), ia: 2, ib: 3 },
             SilhouetteEdge { a: DVec3::new(2.0, 1.0, 0.0), b: DVec3::new(3.0, 1.0, 0.0), ia: 3, ib: 4 },
         ];
-        let (vertices, stats) = penumbra_volumes(&edges, l, 0.5, 10.0, true);
+        let VolumeGeometry { vertices, edges: points, stats } = penumbra_volumes(&edges, l, 0.5, 10.0, true);
         assert_eq!(stats.light_parallel_edges, 1);
-        assert!(vertices.iter().all(|v| v.position.iter().chain(&v.h0).chain(&v.h1).all(|c| c.is_finite())));
+        assert!(vertices.iter().all(|v| v.position.iter().all(|c| c.is_finite()) && (v.edge as usize) < points.len()));
+        assert!(points.iter().all(|p| p.h0.iter().chain(&p.h1).all(|c| c.is_finite())));
         // Radius 0: all planes coincide with the hard-shadow plane; still finite.
-        let (vertices, _) = penumbra_volumes(&edges, l, 0.0, 10.0, true);
+        let vertices = penumbra_volumes(&edges, l, 0.0, 10.0, true).vertices;
         assert!(vertices.iter().all(|v| v.position.iter().all(|c| c.is_finite())));
     }
 }

@@ -33,9 +33,13 @@ use crate::pass_cache::PassKey;
 pub use crate::silhouettes::{silhouette, OpenEdges, Repairs, SilhouetteCache, SilhouetteEdge};
 
 pub mod geometry;
-pub use geometry::{penumbra_volumes, VolumeStats, VolumeVertex};
+pub use geometry::{penumbra_volumes, EdgePoints, VolumeGeometry, VolumeStats, VolumeVertex};
 
-pub const EDGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The penumbra volume edge map: the index + 1 of the edge whose volume is
+/// nearest the light (0: none); pvm/volumes.wgsl says why not the paper's points.
+pub const EDGE_INDEX_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// The `pvm_edge0` / `pvm_edge1` intermediates: the paper's edge maps.
+pub const EDGE_POINT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct PvmParams {
@@ -78,22 +82,29 @@ pub struct PenumbraVolumeMaps {
     volume_pass: VolumePass,
     visibility_pipeline: wgpu::ComputePipeline,
     visibility_layout: wgpu::BindGroupLayout,
+    edge_maps_pipeline: wgpu::ComputePipeline,
+    edge_maps_layout: wgpu::BindGroupLayout,
 }
 
 /// The penumbra volume map (pass 2): what the renderer's pass cache keeps.
 pub struct PvmVolumes {
     pub volume_depth: wgpu::Texture,
-    pub edge0: wgpu::Texture,
-    pub edge1: wgpu::Texture,
+    /// Per texel, the index + 1 into `edges` of the volume nearest the light (0: none).
+    pub edge_index: wgpu::Texture,
+    /// The silhouette edges' end points ([`EdgePoints`]; one zeroed entry when there is none).
+    pub edges: wgpu::Buffer,
     pub stats: VolumeStats,
 }
 
 /// What one PVM render produced besides visibility: the volume map (built
-/// now or reused) and this frame's membership image and counter.
+/// now or reused), this frame's membership image and counter, and, when
+/// intermediates are asked for, the paper's two edge maps.
 pub struct PvmFrame {
     pub volumes: std::sync::Arc<PvmVolumes>,
     pub membership: wgpu::Texture,
     pub counter: wgpu::Buffer,
+    /// `pvm_edge0` and `pvm_edge1` ([`PenumbraVolumeMaps::record_edge_maps`]).
+    pub edge_maps: Option<(wgpu::Texture, wgpu::Texture)>,
 }
 
 /// What pass 2 reads besides the geometry: the light, the frustum, the map
@@ -115,7 +126,7 @@ impl PvmFrame {
             contents: &[0u8; 4],
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         });
-        Self { volumes, membership, counter }
+        Self { volumes, membership, counter, edge_maps: None }
     }
 }
 
@@ -127,8 +138,8 @@ impl PenumbraVolumeMaps {
             "pvm::volume_pass",
             crate::shaders::pvm_volumes(),
             ("vs_main", "fs_main"),
-            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3],
-            &[EDGE_FORMAT, EDGE_FORMAT],
+            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
+            &[EDGE_INDEX_FORMAT],
         );
         let visibility_layout = layout::bind_group_layout(
             device,
@@ -138,8 +149,8 @@ impl PenumbraVolumeMaps {
                 layout::float_texture(1),
                 layout::depth_texture(2),
                 layout::depth_texture(3),
-                layout::float_texture(4),
-                layout::float_texture(5),
+                layout::texture(4, wgpu::TextureSampleType::Uint),
+                layout::parameters(5),
                 layout::parameters(6),
                 layout::storage_texture(7, VISIBILITY_FORMAT),
                 layout::storage_texture(8, VISIBILITY_FORMAT),
@@ -147,10 +158,23 @@ impl PenumbraVolumeMaps {
             ],
         );
         let visibility_pipeline = layout::compute_pipeline(device, "pvm::visibility_pipeline", crate::shaders::pvm(), &visibility_layout);
+        let edge_maps_layout = layout::bind_group_layout(
+            device,
+            "pvm::edge_maps_layout",
+            &[
+                layout::texture(0, wgpu::TextureSampleType::Uint),
+                layout::parameters(1),
+                layout::storage_texture(2, EDGE_POINT_FORMAT),
+                layout::storage_texture(3, EDGE_POINT_FORMAT),
+            ],
+        );
+        let edge_maps_pipeline = layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shaders::pvm_edge_maps(), &edge_maps_layout);
         Self {
             volume_pass,
             visibility_pipeline,
             visibility_layout,
+            edge_maps_pipeline,
+            edge_maps_layout,
         }
     }
 
@@ -171,8 +195,7 @@ impl PenumbraVolumeMaps {
     ) -> Result<(PvmVolumes, usize)> {
         let (l, r) = light;
         let map = params.shadow.map_size;
-        let (mut stats, mut cache_hits, vertices) = (VolumeStats::default(), 0, Vec::new());
-        let mut vertices = vertices;
+        let (mut cache_hits, mut geometry) = (0, VolumeGeometry::default());
         // A point light has no penumbra: skip the volumes entirely.
         if r > 0.0 {
             let silhouette = if params.repairs.hidden {
@@ -183,15 +206,44 @@ impl PenumbraVolumeMaps {
             };
             cache_hits = silhouette.cache_hits;
             let reach = 4.0 * frustum.far as f64 + 4.0 * r;
-            let (v, s) = penumbra_volumes(&silhouette.edges, l, r, reach, params.repairs.cone);
-            vertices = v;
-            stats = VolumeStats { hidden_edges: silhouette.hidden_edges, silhouette_edges: s.silhouette_edges + silhouette.hidden_edges, ..s };
+            geometry = penumbra_volumes(&silhouette.edges, l, r, reach, params.repairs.cone);
+            geometry.stats.hidden_edges = silhouette.hidden_edges;
+            geometry.stats.silhouette_edges += silhouette.hidden_edges;
         }
-        let edge_usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
-        let edge0 = layout::create_texture(device, "pvm::edge0_map", (map, map), EDGE_FORMAT, edge_usage);
-        let edge1 = layout::create_texture(device, "pvm::edge1_map", (map, map), EDGE_FORMAT, edge_usage);
-        let volume_depth = self.volume_pass.record(device, encoder, frustum, &vertices, map, &[&edge0, &edge1], timestamps)?;
-        Ok((PvmVolumes { volume_depth, edge0, edge1, stats }, cache_hits))
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let edge_index = layout::create_texture(device, "pvm::edge_index_map", (map, map), EDGE_INDEX_FORMAT, usage);
+        // A storage binding may not be empty: one zeroed entry stands for no edges.
+        let points = if geometry.edges.is_empty() { vec![EdgePoints { h0: [0.0; 4], h1: [0.0; 4] }] } else { geometry.edges };
+        let edges = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("pvm::edges"),
+            contents: bytemuck::cast_slice(&points),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let volume_depth = self.volume_pass.record(device, encoder, frustum, &geometry.vertices, map, &[&edge_index], timestamps)?;
+        Ok((PvmVolumes { volume_depth, edge_index, edges, stats: geometry.stats }, cache_hits))
+    }
+
+    /// The paper's two edge maps (4.1.3) rebuilt from the edge-index map,
+    /// for the `pvm_edge0` and `pvm_edge1` intermediates.
+    pub fn record_edge_maps(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volumes: &PvmVolumes) -> (wgpu::Texture, wgpu::Texture) {
+        let size = volumes.edge_index.size();
+        let usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
+        let edge0 = layout::create_texture(device, "pvm::edge0_map", (size.width, size.height), EDGE_POINT_FORMAT, usage);
+        let edge1 = layout::create_texture(device, "pvm::edge1_map", (size.width, size.height), EDGE_POINT_FORMAT, usage);
+        let views = [&volumes.edge_index, &edge0, &edge1].map(layout::view);
+        let bind_group = layout::bind_group(
+            device,
+            "pvm::edge_maps_bind_group",
+            &self.edge_maps_layout,
+            &[
+                wgpu::BindingResource::TextureView(&views[0]),
+                volumes.edges.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&views[1]),
+                wgpu::BindingResource::TextureView(&views[2]),
+            ],
+        );
+        layout::dispatch_per_pixel(encoder, "pvm::edge_maps_pass", &self.edge_maps_pipeline, &bind_group, (size.width, size.height), None);
+        (edge0, edge1)
     }
 
     /// Pass 3: visibility per camera pixel.
@@ -212,7 +264,7 @@ impl PenumbraVolumeMaps {
         let flags = u32::from(params.falloff) | (u32::from(params.repairs.centre) << 1) | (u32::from(params.repairs.horizon) << 2);
         let uniforms = layout::parameter_buffer(device, "pvm::visibility_uniforms", &params.shadow.uniform(frustum, light.0, light.1, flags));
         let v = &frame.volumes;
-        let views = [shadow_map, &v.volume_depth, &v.edge0, &v.edge1, visibility, &frame.membership].map(layout::view);
+        let views = [shadow_map, &v.volume_depth, &v.edge_index, visibility, &frame.membership].map(layout::view);
         let bind_group = layout::bind_group(
             device,
             "pvm::visibility_bind_group",
@@ -223,10 +275,10 @@ impl PenumbraVolumeMaps {
                 wgpu::BindingResource::TextureView(&views[0]),
                 wgpu::BindingResource::TextureView(&views[1]),
                 wgpu::BindingResource::TextureView(&views[2]),
-                wgpu::BindingResource::TextureView(&views[3]),
+                v.edges.as_entire_binding(),
                 uniforms.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&views[3]),
                 wgpu::BindingResource::TextureView(&views[4]),
-                wgpu::BindingResource::TextureView(&views[5]),
                 frame.counter.as_entire_binding(),
             ],
         );

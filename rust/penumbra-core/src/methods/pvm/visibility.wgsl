@@ -9,8 +9,13 @@
 @group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
 @group(0) @binding(2) var shadow_map: texture_depth_2d;
 @group(0) @binding(3) var volume_depth: texture_depth_2d;
-@group(0) @binding(4) var edge0_map: texture_2d<f32>;
-@group(0) @binding(5) var edge1_map: texture_2d<f32>;
+// The penumbra volume edge map (4.1.3), by index into `edges` (pvm/volumes.wgsl).
+@group(0) @binding(4) var edge_index: texture_2d<u32>;
+struct EdgePoints {
+    h0: vec4<f32>,
+    h1: vec4<f32>,
+};
+@group(0) @binding(5) var<storage, read> edges: array<EdgePoints>;
 // mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon".
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
@@ -81,9 +86,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             v = select(0.0, 1.0, centre_lit);
             // Listing 4.2: in a volume when the PVDM is nearer the light than the pixel.
             if (map_depth(pvm, volume_depth, q.xyz) < q.w) {
-                let size_map = vec2<i32>(textureDimensions(edge0_map));
+                let size_map = vec2<i32>(textureDimensions(edge_index));
                 let t = clamp(vec2<i32>(floor(light_map_coords(pvm.light_space, q.xyz))), vec2<i32>(0), size_map - 1);
-                var k = volume_visibility(p, textureLoad(edge0_map, t, 0).xyz, textureLoad(edge1_map, t, 0).xyz);
+                // The depth map and the index map are written together: a
+                // texel behind a volume holds an index (clamped all the same).
+                let edge = edges[min(max(textureLoad(edge_index, t, 0).x, 1u) - 1u, arrayLength(&edges) - 1u)];
+                var k = volume_visibility(p, edge.h0.xyz, edge.h1.xyz);
                 // Repair "centre" (beyond the paper): the volume nearest the
                 // light at this texel need not be the one that shadows p
                 // (4.3's overlap): a far edge's inner volume reaching past the
