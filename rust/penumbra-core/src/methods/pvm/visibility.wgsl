@@ -22,6 +22,17 @@ struct EdgePoints {
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var<storage, read_write> pixels_in_volume: atomic<u32>;
 
+// v / |v| without overflow or underflow for any finite v (zero for zero):
+// scaled by its largest component first, so that the squares stay near 1.
+fn unit(v: vec3<f32>) -> vec3<f32> {
+    let big = max(max(abs(v.x), abs(v.y)), abs(v.z));
+    if (big == 0.0) {
+        return v;
+    }
+    let w = v / big;
+    return w / length(w);
+}
+
 // k of Eq. 4.2 for the silhouette edge h0-h1 and the receiver p
 // (disk_fraction, Eq. 4.1, is in shaders/shadow_test.wgsl).
 fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
@@ -31,10 +42,14 @@ fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
     // so that (h1 - h0) x (h0 - l), the hard-shadow plane's normal, points
     // away from the occluder; so does this normal, which turns continuously
     // with p through the hard-shadow plane.
-    let m = cross(h1 - h0, p - h0);
+    // Both factors are made unit first: the cross product of raw differences
+    // squares the scene's scale, and its length the square again, which
+    // overflows f32 beyond coordinates of about 1e9 (issue 22: visibility
+    // 1/2 everywhere in the volumes of a scene scaled by 1e10).
+    let m = cross(unit(h1 - h0), unit(p - h0));
     let len = length(m);
     // p on the edge's line: the plane is undefined; half the light is the limit.
-    if (len <= 1e-12 * max(dot(h1 - h0, h1 - h0), 1e-30)) {
+    if (len <= 1e-7) {
         return 0.5;
     }
     let n = m / len;
