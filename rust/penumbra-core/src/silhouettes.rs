@@ -18,12 +18,13 @@ use crate::topology::{Topology, NO_FACE};
 pub enum OpenEdges {
     /// Casters must be closed 2-manifolds (the paper's assumption).
     Error,
-    /// Boundary edges of open meshes are silhouette edges.
+    /// Edges that are not two-sided (open and non-manifold meshes) are
+    /// silhouette edges where all their faces lie on one side (`silhouette`).
     Silhouette,
 }
 
 impl OpenEdges {
-    pub const NAMES: [&'static str; 2] = ["error", "silhouette"];
+    pub const NAMES: [&'static str; 2] = ["silhouette", "error"];
 
     pub fn parse(name: &str) -> Self {
         if name == "silhouette" {
@@ -95,8 +96,19 @@ pub struct SilhouetteEdge {
 
 /// Silhouette edges of one mesh with respect to the light centre `l` (4.1.1):
 /// edges between a face facing the light and one facing away, plus, when
-/// `boundary` is set, every edge with a single face.
-pub fn silhouette(topology: &Topology, l: DVec3, boundary: bool) -> Vec<SilhouetteEdge> {
+/// `open` is set, the edges that are not two-sided (boundary and
+/// non-manifold edges) whose faces all lie on one side of the plane through
+/// the edge and the light.
+///
+/// That side test is the facing test's own meaning: for an edge of a closed,
+/// consistently wound mesh, one face facing the light and the other away is
+/// exactly both faces on one side of that plane (the surface folds there as
+/// the light sees it). It needs no winding, so it extends to an edge with
+/// one face (the surface ends there: always on the outline, unless the face
+/// is seen edge-on), to two faces wound the same way, and to three or more
+/// faces (on the outline only when all lie on one side). A departure from
+/// the paper, which assumes closed 2-manifolds (`open_edges = "silhouette"`).
+pub fn silhouette(topology: &Topology, l: DVec3, open: bool) -> Vec<SilhouetteEdge> {
     let facing: Vec<bool> = (0..topology.faces.len() as u32)
         .map(|f| {
             let centroid = topology.faces[f as usize].iter().map(|&i| topology.positions[i as usize]).sum::<DVec3>() / 3.0;
@@ -107,30 +119,61 @@ pub fn silhouette(topology: &Topology, l: DVec3, boundary: bool) -> Vec<Silhouet
     for e in &topology.edges {
         let [f0, f1] = e.faces;
         let is_boundary = f0 == NO_FACE || f1 == NO_FACE;
-        if is_boundary && !boundary {
+        if is_boundary && !open {
             continue;
         }
         if !is_boundary && facing[f0 as usize] == facing[f1 as usize] {
             continue;
         }
-        let (mut ia, mut ib) = (e.v[0], e.v[1]);
-        let (mut a, mut b) = (topology.positions[ia as usize], topology.positions[ib as usize]);
+        let faces: Vec<u32> = [f0, f1].into_iter().filter(|&f| f != NO_FACE).collect();
         // Both faces of a silhouette edge lie on the occluder's side of the
         // plane through the edge and the light; take the first that is off it.
-        let normal = (b - a).cross(a - l);
-        let side = [f0, f1]
-            .iter()
-            .filter(|&&f| f != NO_FACE)
-            .map(|&f| normal.dot(topology.opposite_vertex(f, e) - a))
-            .find(|d| d.abs() > 1e-12 * normal.length() * (b - a).length().max(1e-300))
-            .unwrap_or(0.0);
-        if side > 0.0 {
-            std::mem::swap(&mut a, &mut b);
-            std::mem::swap(&mut ia, &mut ib);
+        if let Some(edge) = oriented(topology, e.v, &faces, l, false) {
+            out.push(edge);
         }
-        out.push(SilhouetteEdge { a, b, ia, ib });
+    }
+    if open {
+        for e in &topology.non_manifold {
+            if let Some(edge) = oriented(topology, e.v, &e.faces, l, true) {
+                out.push(edge);
+            }
+        }
     }
     out
+}
+
+/// The edge between welded vertices `v`, oriented so that its hard-shadow
+/// normal points away from its `faces`. With `strict`, None unless every
+/// face off the plane through the edge and `l` lies on one side of it (and
+/// one at least is off it); otherwise the first face off the plane decides.
+fn oriented(topology: &Topology, v: [u32; 2], faces: &[u32], l: DVec3, strict: bool) -> Option<SilhouetteEdge> {
+    let (mut ia, mut ib) = (v[0], v[1]);
+    let (mut a, mut b) = (topology.positions[ia as usize], topology.positions[ib as usize]);
+    let normal = (b - a).cross(a - l);
+    let tolerance = 1e-12 * normal.length() * (b - a).length().max(1e-300);
+    let sides = faces.iter().map(|&f| normal.dot(topology.opposite(f, v) - a)).filter(|d| d.abs() > tolerance);
+    let side = if strict {
+        let (mut positive, mut negative) = (false, false);
+        for d in sides {
+            positive |= d > 0.0;
+            negative |= d < 0.0;
+        }
+        if positive == negative {
+            return None;
+        }
+        if positive {
+            1.0
+        } else {
+            -1.0
+        }
+    } else {
+        sides.into_iter().next().unwrap_or(0.0)
+    };
+    if side > 0.0 {
+        std::mem::swap(&mut a, &mut b);
+        std::mem::swap(&mut ia, &mut ib);
+    }
+    Some(SilhouetteEdge { a, b, ia, ib })
 }
 
 /// The silhouette edges that the light's centre sees, and how many are hidden.
@@ -188,7 +231,7 @@ fn mesh_key(mesh: &PreparedMesh) -> u64 {
 
 const CACHE_LIMIT: usize = 256;
 
-/// (mesh content, light centre bits, boundary edges count).
+/// (mesh content, light centre bits, whether open edges count).
 type SilhouetteKey = (u64, [u64; 3], bool);
 
 /// Topology and silhouette caches, owned by the renderer and shared by the

@@ -377,8 +377,19 @@ fn zero_area_duplicate_and_t_junction_faces_are_classified() {
     // A duplicated face: its edges get two faces of the same winding.
     let mut duplicate = f.clone();
     duplicate.push(f[0]);
-    let err = Topology::build(&p, &duplicate).require_closed("dup", true).unwrap_err().to_string();
+    let dup = Topology::build(&p, &duplicate);
+    let err = dup.require_closed("dup", false).unwrap_err().to_string();
     assert!(err.contains("not a 2-manifold"), "{err}");
+    // Taken as open: the duplicated face lies on its twin's side of every
+    // edge, so the silhouette is the closed box's.
+    dup.require_closed("dup", true).unwrap();
+    let l = DVec3::new(0.5, 6.0, 0.3);
+    let key = |edges: Vec<SilhouetteEdge>| {
+        let mut k: Vec<(u32, u32)> = edges.iter().map(|e| (e.ia, e.ib)).collect();
+        k.sort_unstable();
+        k
+    };
+    assert_eq!(key(silhouette(&dup, l, true)), key(silhouette(&Topology::build(&p, &f), l, false)));
     // A t-junction: split one face's edge with a midpoint its neighbour does not share.
     let mut q = p.clone();
     q.push((p[0] + p[2]) * 0.5);

@@ -25,8 +25,7 @@ struct Receiver {
 // The receiver at p (normal n, light cosine cos_theta > 0) for the bias mode
 // of `t`: mode 0 (`slope`) offsets the plane along n by `normal_offset`
 // texels and subtracts `constant_bias` texels (the plane itself replaces the
-// slope term); second_depth and midpoint subtract the same constant as a
-// minimum separation; `none` compares the plane unbiased.
+// slope term); the other modes compare the plane unbiased.
 fn pcf_receiver(t: ShadowTest, p: vec3<f32>, n: vec3<f32>) -> Receiver {
     var r: Receiver;
     r.normal = n;
@@ -35,10 +34,6 @@ fn pcf_receiver(t: ShadowTest, p: vec3<f32>, n: vec3<f32>) -> Receiver {
     r.bias = 0.0;
     if (t.mode.x == 0u) {
         r.origin = p + n * (t.bias.x * r.texel);
-    }
-    // second_depth and midpoint keep the constant term as a minimum
-    // separation for thin closed casters (see biased_receiver).
-    if (t.mode.x != 2u) {
         r.bias = t.bias.y * r.texel;
     }
     r.depth = light_view_depth(t.light_space, r.origin);

@@ -3,11 +3,10 @@
 //   mode 0 `slope`: receiver-side normal offset plus slope-scaled depth bias,
 //                   both in texels of the map at the receiver's depth;
 //   mode 1 `second_depth`: map of back faces (front faces culled; Wang and
-//                   Molnar 1994), compared with the slope-scaled depth bias
-//                   only as a minimum separation (thin closed casters);
+//                   Molnar 1994), compared without bias;
 //   mode 2 `none`: raw comparison (shows acne; for study);
 //   mode 3 `midpoint`: map half-way between first and second depth (Woo
-//                   1992), with the same minimum separation.
+//                   1992), compared without bias.
 
 struct ShadowTest {
     light_space: LightSpace,
@@ -29,23 +28,14 @@ fn light_cosine(t: ShadowTest, p: vec3<f32>, n: vec3<f32>) -> f32 {
 // The point whose map texel is read (xyz) and the biased depth compared
 // with the map (w), for a receiver at p with normal n and light cosine cos_theta > 0.
 fn biased_receiver(t: ShadowTest, p: vec3<f32>, n: vec3<f32>, cos_theta: f32) -> vec4<f32> {
-    if (t.mode.x == 2u) {
+    if (t.mode.x != 0u) {
         return vec4<f32>(p, light_view_depth(t.light_space, p));
     }
     let texel = light_texel_size(t.light_space, light_view_depth(t.light_space, p));
+    let q = p + n * (t.bias.x * texel);
     // cos_theta > 0, so the tangent is finite; it is clamped at grazing angles.
     let tan_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0)) / cos_theta;
     let bias = texel * (t.bias.y + t.bias.z * min(tan_theta, t.bias.w));
-    if (t.mode.x != 0u) {
-        // second_depth and midpoint keep the slope scheme's depth bias as a
-        // minimum separation (no normal offset): a closed caster thinner than
-        // the depth a texel spans along its slope (a plate 1e-4 thick) has its
-        // back faces within that depth of its lit front face, and the front
-        // face shadowed itself (visibility 0.57-0.75 on a lit plate, issue 22).
-        // Thicker casters are separated by far more, as Wang and Molnar assume.
-        return vec4<f32>(p, light_view_depth(t.light_space, p) - bias);
-    }
-    let q = p + n * (t.bias.x * texel);
     return vec4<f32>(q, light_view_depth(t.light_space, q) - bias);
 }
 

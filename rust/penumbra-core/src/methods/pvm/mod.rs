@@ -60,7 +60,7 @@ impl PvmParams {
         Ok(Self {
             shadow: ShadowMapSettings::read(r)?,
             falloff: r.bool("falloff", true)?,
-            open_edges: OpenEdges::parse(r.choice("open_edges", "error", &OpenEdges::NAMES)?),
+            open_edges: OpenEdges::parse(r.choice("open_edges", "silhouette", &OpenEdges::NAMES)?),
             repairs: Repairs::parse(r.choice("repairs", "all", &REPAIR_LEVELS)?),
         })
     }
