@@ -65,7 +65,7 @@ OPEN_CONFIGS: list[tuple[str, dict[str, Any]]] = [
     ("pvm", {}),
     ("pvm", PVM_RECOMMENDED),
     ("pvmf", PVMF_RECOMMENDED),
-    ("pvmf", {**PVMF_RECOMMENDED, "bias": "slope"}),
+    ("pvmf", {**PVMF_RECOMMENDED, "bias": "second_depth"}),
 ]
 PVM_LEVELS = ["none", "cone", "cone+hidden", "cone+hidden+centre", "all"]
 PVMF_LEVELS = ["none", "hidden", "hidden+horizon", "all"]

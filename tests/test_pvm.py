@@ -197,3 +197,25 @@ def test_visibility_does_not_depend_on_the_scene_scale(renderer: penumbra.Render
         got = renderer.render(scaled_scene(base, scale), method, map_size=256, **params)
         assert expected.stats.get("pixels_in_volume", expected.stats.get("masked_pixels", 0)) > 100
         np.testing.assert_allclose(got.visibility, expected.visibility, atol=1e-3, err_msg=f"{method} {params} at scale {scale:g}")
+
+
+def test_a_receiver_whose_horizon_cuts_the_light_sees_the_part_above_it(renderer: penumbra.Renderer) -> None:
+    """Repair "horizon" (docs/real_meshes.md): the front face of a wall whose
+    plane passes 0.1 in front of the light's centre (radius 0.5) sees the part
+    of the light above that plane, by Eq. 4.1 with the face's plane as the
+    cutting plane: (acos(0.2) - 0.2 sqrt(1 - 0.04)) / pi = 0.3734 on every
+    pixel (nothing else hides it). The paper takes the centre for the
+    horizon test: 0. pvmf gives the same."""
+    wall = box((0.0, 1.0, 0.0), (3.0, 2.0, 0.2), name="wall")
+    light = penumbra.SphereLight((0.0, 3.0, 0.0), 0.5, intensity=40.0)
+    camera = penumbra.Camera(eye=(0.0, 1.5, 6.0), target=(0.0, 1.0, 0.0), fov_y=40, width=64, height=64)
+    scene = penumbra.Scene([ground_slab(), wall], light, camera)
+    expected = (np.arccos(0.2) - 0.2 * np.sqrt(1 - 0.04)) / np.pi
+    for method, levels in (("pvm", ("all", "cone+hidden+centre")), ("pvmf", ("all", "hidden"))):
+        repaired = renderer.render(scene, method, repairs=levels[0])
+        front = (repaired.object_id == 1) & (repaired.normal[..., 2] > 0.99)
+        assert front.sum() > 300
+        np.testing.assert_allclose(repaired.visibility[front], expected, atol=1e-4, err_msg=method)
+        paper = renderer.render(scene, method, repairs=levels[1])
+        assert (paper.visibility[front] == 0.0).all(), method
+

@@ -318,3 +318,79 @@ impl SilhouetteCache {
         t
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An axis-aligned box (outward, counter-clockwise faces) from `lo` to `hi`.
+    fn cuboid(lo: DVec3, hi: DVec3) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+        let p = (0..8)
+            .map(|i| DVec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }))
+            .collect();
+        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        (p, quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect())
+    }
+
+    fn occluders(parts: &[&(Vec<DVec3>, Vec<[u32; 3]>)]) -> Occluders {
+        Occluders::from_meshes(parts.iter().map(|(p, f)| (p.as_slice(), f.as_slice())))
+    }
+
+    #[test]
+    fn edges_under_a_wider_caster_are_hidden_and_the_casters_own_are_not() {
+        let l = DVec3::new(0.3, 6.0, 0.2);
+        let top = cuboid(DVec3::new(-1.0, 3.0, -1.0), DVec3::new(1.0, 3.5, 1.0));
+        let below = cuboid(DVec3::new(-0.4, 1.0, -0.4), DVec3::new(0.4, 1.8, 0.4));
+        let occ = occluders(&[&top, &below]);
+        let top_edges = silhouette(&Topology::build(&top.0, &top.1), l, false);
+        let below_edges = silhouette(&Topology::build(&below.0, &below.1), l, false);
+        let (kept, hidden) = visible_from_light(&top_edges, &occ, l);
+        assert_eq!((kept.len(), hidden), (top_edges.len(), 0));
+        let (kept, hidden) = visible_from_light(&below_edges, &occ, l);
+        assert!(kept.is_empty() && hidden == below_edges.len() && hidden > 0, "{kept:?}");
+    }
+
+    #[test]
+    fn a_box_resting_on_the_ground_keeps_its_contact_edges() {
+        // The silhouette's lower edges lie on the ground's top face: the
+        // ground does not hide them (the test point is nudged towards the light).
+        let l = DVec3::new(2.0, 6.0, 1.0);
+        let ground = cuboid(DVec3::new(-5.0, -0.2, -5.0), DVec3::new(5.0, 0.0, 5.0));
+        let resting = cuboid(DVec3::new(-0.5, 0.0, -0.5), DVec3::new(0.5, 2.0, 0.5));
+        let edges = silhouette(&Topology::build(&resting.0, &resting.1), l, false);
+        assert!(edges.iter().any(|e| e.a.y == 0.0 && e.b.y == 0.0), "a contact edge is on the silhouette");
+        let (kept, hidden) = visible_from_light(&edges, &occluders(&[&ground, &resting]), l);
+        assert_eq!((kept.len(), hidden), (edges.len(), 0));
+    }
+
+    #[test]
+    fn open_edges_are_silhouettes_oriented_away_from_their_face() {
+        // One triangle facing the light: its three boundary edges are its outline.
+        let p = vec![DVec3::new(-1.0, 1.0, -1.0), DVec3::new(1.0, 1.0, -1.0), DVec3::new(0.0, 1.0, 1.0)];
+        let t = Topology::build(&p, &[[0, 2, 1]]);
+        let l = DVec3::new(0.1, 5.0, 0.2);
+        assert!(silhouette(&t, l, false).is_empty());
+        let edges = silhouette(&t, l, true);
+        assert_eq!(edges.len(), 3);
+        let centroid = (p[0] + p[1] + p[2]) / 3.0;
+        for e in edges {
+            assert!((e.b - e.a).cross(e.a - l).dot(centroid - e.a) < 0.0, "{e:?} points towards its face");
+        }
+    }
+
+    #[test]
+    fn a_fin_on_one_side_is_a_silhouette_and_fins_on_both_sides_are_not() {
+        // Edge 0-1 along x at the origin, the light above: faces hang off it
+        // on the -z side, or on both sides.
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(0.5, -0.2, -1.0), DVec3::new(0.5, 0.3, -1.0), DVec3::new(0.5, 0.0, 1.0)];
+        let l = DVec3::new(0.5, 5.0, 0.1);
+        let one_side = Topology::build(&p, &[[0, 1, 2], [0, 1, 3], [1, 0, 3]]);
+        assert_eq!(one_side.non_manifold.len(), 1);
+        let edges: Vec<_> = silhouette(&one_side, l, true).into_iter().filter(|e| (e.ia.min(e.ib), e.ia.max(e.ib)) == (0, 1)).collect();
+        assert_eq!(edges.len(), 1);
+        let e = edges[0];
+        assert!((e.b - e.a).cross(e.a - l).z > 0.0, "the normal points away from the fins (+z)");
+        let both_sides = Topology::build(&p, &[[0, 1, 2], [0, 1, 3], [1, 0, 4]]);
+        assert!(silhouette(&both_sides, l, true).iter().all(|e| (e.ia.min(e.ib), e.ia.max(e.ib)) != (0, 1)));
+    }
+}

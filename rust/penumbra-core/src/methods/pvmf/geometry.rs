@@ -200,4 +200,23 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn local_distances_follow_the_edge_and_the_paper_keeps_the_nearer_end() {
+        // A vertical edge from the ground to 2 units up, under a light at 6.
+        let l = DVec3::new(0.0, 6.0, 0.0);
+        let e = edge([1.0, 0.0, 1.0], [1.0, 2.0, 1.0]);
+        let (d_a, d_b) = ((e.a - l).length() as f32, (e.b - l).length() as f32);
+        let (paper, _) = mask_volumes(&[e], l, 0.5, 0.02, Offsets::Radius, 10.0, false);
+        assert!(paper.iter().all(|v| v.d_e == d_b && v.d_local == 0.0), "the nearer end's distance, flat");
+        let (local, _) = mask_volumes(&[e], l, 0.5, 0.02, Offsets::Radius, 10.0, true);
+        // Outer quad: corners 0-1 from a, 2-3 from b; inner quad the other way.
+        let ends = [d_a, d_a, d_b, d_b, d_b, d_b, d_a, d_a];
+        for (quad, corner_ends) in local.chunks(6).zip(ends.chunks(4)) {
+            for (v, k) in quad.iter().zip([0, 1, 2, 0, 2, 3]) {
+                assert_eq!(v.d_local, corner_ends[k]);
+                assert_eq!(v.d_e, d_b);
+            }
+        }
+    }
 }
