@@ -24,7 +24,12 @@ Columns:
 Then the repairs (docs/real_meshes.md) one level at a time, and the targets
 of issue 15 checked on the closed-mesh scenes.
 
-    python benchmarks/real_meshes.py [--size 160] [--spp 1024] [--repeats 5] [--meshes ../shared/meshes]
+    python benchmarks/real_meshes.py [--size 160] [--spp 1024] [--repeats 5] [--meshes ../shared/meshes] [--images docs/images]
+
+With --images, also writes real_meshes_<mesh>.png there: visibility of the
+ground truth, pvm with repairs="none" (the paper's construction as
+written), pvm and pvmf (recommended settings), side by side, for spot and
+the teapot seen close at radius 0.3.
 """
 
 from __future__ import annotations
@@ -152,6 +157,21 @@ def repairs(renderer: penumbra.Renderer, scenes: dict[str, penumbra.Scene], args
             print(f"| {method} | {level} | " + " | ".join(cells) + " |", flush=True)
 
 
+def silhouettes(renderer: penumbra.Renderer, scenes: dict[str, penumbra.Scene]) -> None:
+    print("\nSilhouettes as pvm sees them (the stats of one render each)\n")
+    print("| scene | silhouette edges | hidden from the light's centre | junction vertices | extrusions outside the light cone (paper) |")
+    print("|---|---|---|---|---|")
+    for name, scene in scenes.items():
+        paper = renderer.render(scene, "pvm", repairs="none").stats
+        repaired = renderer.render(scene, "pvm").stats
+        corners = 2 * paper["penumbra_volumes"]
+        share = paper["extrusions_outside_light_cone"] / max(corners, 1)
+        print(
+            f"| {name} | {paper['silhouette_edges']} | {repaired['hidden_silhouette_edges']} | {paper['silhouette_junction_vertices']} | "
+            f"{paper['extrusions_outside_light_cone']} of {corners} ({100 * share:.0f}%) |"
+        )
+
+
 def targets(results: dict[str, dict[tuple[str, str], dict[str, float]]]) -> None:
     print("\nIssue 15's targets on the closed-mesh scenes (worst scene)\n")
     checks = [
@@ -173,6 +193,20 @@ def targets(results: dict[str, dict[tuple[str, str], dict[str, float]]]) -> None
         )
 
 
+def pictures(renderer: penumbra.Renderer, scenes: dict[str, penumbra.Scene], folder: Path, args: argparse.Namespace) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in ("spot.obj close r=0.3", "teapot-mcguire-closed.obj close r=0.3"):
+        scene = scenes[name]
+        tiles = [pm.ground_truth(scene, spp=args.spp, kinds=("visibility",)).visibility]
+        for method, params in (("pvm", {"repairs": "none"}), ("pvm", {}), ("pvmf", PVMF_RECOMMENDED)):
+            tiles.append(renderer.render(scene, method, **params).visibility)
+        gap = np.ones((tiles[0].shape[0], 4), dtype=np.float32) * 0.5
+        row = np.concatenate([t for tile in tiles for t in (tile, gap)][:-1], axis=1)
+        path = folder / f"real_meshes_{name.split('.')[0].split('-')[0]}.png"
+        penumbra.write_image(path, row)
+        print(f"wrote {path}: truth | pvm repairs=none | pvm | pvmf recommended ({name})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--size", type=int, default=160)
@@ -180,15 +214,19 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--meshes", type=Path, default=MESHES)
     parser.add_argument("--skip", nargs="*", default=[], choices=["closed", "repairs", "open"], help="parts to leave out")
+    parser.add_argument("--images", type=Path, help="folder for the side-by-side pictures")
     args = parser.parse_args()
     # No pass cache: the repeats are timed, so every pass must run each time.
     renderer = penumbra.Renderer(pass_cache=False)
     print(f"adapter {renderer.adapter_info['name']}; {args.size}x{args.size}; ground truth Mitsuba {pm.variant()} visibility at {args.spp} samples, noise from a second seed; median of {args.repeats} renders\n")
     closed = penumbra.scenes.real_mesh_suite(str(args.meshes), width=args.size, height=args.size)
+    if args.images is not None:
+        pictures(renderer, closed, args.images, args)
     if "closed" not in args.skip:
         results = table(renderer, closed, CONFIGS, args)
         targets(results)
     if "repairs" not in args.skip:
+        silhouettes(renderer, closed)
         repairs(renderer, closed, args)
     if "open" not in args.skip:
         print("\nOpen and non-manifold meshes (pvm and pvmf take edges that are not two-sided as silhouette edges where all their faces lie on one side)\n")

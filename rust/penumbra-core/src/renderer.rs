@@ -440,6 +440,7 @@ impl Renderer {
                 stats.insert("silhouette_edges".into(), s.silhouette_edges as i64);
                 stats.insert("penumbra_volumes".into(), s.volume_quads as i64);
                 stats.insert("silhouette_junction_vertices".into(), s.junction_vertices as i64);
+                stats.insert("extrusions_outside_light_cone".into(), s.extrusions_outside_cone as i64);
                 stats.insert("light_parallel_edges".into(), s.light_parallel_edges as i64);
                 stats.insert("hidden_silhouette_edges".into(), s.hidden_edges as i64);
                 stats.insert("silhouette_cache_hits".into(), cache_hits as i64);

@@ -49,6 +49,10 @@ pub struct VolumeStats {
     /// Silhouette edges hidden from the light's centre (no volume; counted
     /// in `silhouette_edges`).
     pub hidden_edges: usize,
+    /// Quadrilateral corners whose neighbouring planes meet outside the
+    /// vertex's light cone (`in_light_cone`): kept as the paper has them
+    /// without repair "cone", each edge's own plane with it.
+    pub extrusions_outside_cone: usize,
 }
 
 /// The planes of one silhouette edge (4.1.2).
@@ -82,8 +86,9 @@ fn edge_planes(e: &SilhouetteEdge, l: DVec3, r: f64) -> Option<EdgePlanes> {
 
 /// Extrusion vector at vertex `v` shared by the planes with normals `n_in`
 /// (incoming edge) and `n_out` (outgoing edge), both through `v` (4.1.2),
-/// for a light of centre `l` and radius `r`.
-fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3, r: f64, cone: bool) -> DVec3 {
+/// for a light of centre `l` and radius `r`; and whether the planes'
+/// intersection left the vertex's light cone.
+fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3, r: f64, cone: bool) -> (DVec3, bool) {
     let line = n_out.cross(n_in);
     // Coincident (or nearly) planes: the paper's rule, away from the displaced light.
     let mut dir = if line.length() < 1e-9 { (v - d).normalize_or_zero() } else { line.normalize() };
@@ -96,8 +101,10 @@ fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3, r: f64, co
     if dir.dot(v - d) < 0.0 {
         dir = -dir;
     }
+    let inside = in_light_cone(v, dir, d, l, r);
+    let outside = inside != dir;
     if cone {
-        return in_light_cone(v, dir, d, l, r);
+        return (inside, outside);
     }
     // The paper's construction alone (`repairs = "none"`), with the one
     // guard it always had: every ray of the true penumbra through v leaves
@@ -110,9 +117,9 @@ fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3, r: f64, co
     // its own plane's ray from d instead, which always leaves the light: n is
     // orthogonal to v - l, so (v - d).(v - l) = |v - l|^2 > 0.
     if dir.dot(v - l) <= 0.0 {
-        return (v - d).normalize_or_zero();
+        return ((v - d).normalize_or_zero(), outside);
     }
-    dir
+    (dir, outside)
 }
 
 /// `dir` if it lies in the cone of the rays that leave the light and pass
@@ -174,6 +181,7 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, 
 
     let mut vertices = Vec::with_capacity(edges.len() * 12);
     let mut points = Vec::with_capacity(edges.len());
+    let outside = std::cell::Cell::new(0usize);
     let f = |p: DVec3| p.as_vec3().to_array();
     for (i, e) in edges.iter().enumerate() {
         let Some(own) = &planes[i] else {
@@ -186,10 +194,10 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, 
             match neighbour.and_then(|j| planes[j].as_ref()) {
                 Some(other) => {
                     let (n_in, n_out) = if start { (other, own) } else { (own, other) };
-                    (
-                        extrusion(v, n_in.outer, n_out.outer, own.d_outer, l, r, cone),
-                        extrusion(v, n_in.inner, n_out.inner, own.d_inner, l, r, cone),
-                    )
+                    let (o, outer_outside) = extrusion(v, n_in.outer, n_out.outer, own.d_outer, l, r, cone);
+                    let (i, inner_outside) = extrusion(v, n_in.inner, n_out.inner, own.d_inner, l, r, cone);
+                    outside.set(outside.get() + usize::from(outer_outside) + usize::from(inner_outside));
+                    (o, i)
                 }
                 // Unpaired: this edge's own plane alone (coincident-plane rule).
                 None => ((v - own.d_outer).normalize_or_zero(), (v - own.d_inner).normalize_or_zero()),
@@ -210,6 +218,7 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, 
             stats.volume_quads += 1;
         }
     }
+    stats.extrusions_outside_cone = outside.get();
     VolumeGeometry { vertices, edges: points, stats }
 }
 
