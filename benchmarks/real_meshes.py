@@ -62,6 +62,7 @@ CONFIGS: list[tuple[str, dict[str, Any]]] = [
     ("pvmf", {}),
     ("pvmf", PVMF_RECOMMENDED),
     ("pvmf", {**PVMF_RECOMMENDED, "repairs": "none"}),
+    ("pvmf", {**PVMF_RECOMMENDED, "bias": "second_depth"}),
     ("reference", {"n_samples": 256}),
 ]
 OPEN_CONFIGS: list[tuple[str, dict[str, Any]]] = [

@@ -133,14 +133,16 @@ fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3, r: f64, co
 /// collinear seen from the light but not in depth: the line then turns
 /// towards the silhouette's own direction), nearly opposite (a silhouette
 /// that folds back), or meet at a sharp corner (the miter runs off beyond
-/// the cone). On the real meshes of ../shared/meshes a fifth of the
-/// extrusions were more than 5 times the cone's angle off its axis, and
-/// their quads swept across the floor as streaks. No vector in both planes
+/// the cone). On spot and the teapot of ../shared/meshes 21-74% of the
+/// quad corners lie outside it (`extrusions_outside_light_cone`,
+/// docs/real_meshes.md), some far off, and their quads swept across the
+/// floor as streaks. No vector in both planes
 /// lies in the cone then; each edge keeps its own plane at `v` (the paper's
 /// coincident-plane rule), which leaves a sliver between the two quads
 /// where the shadow-map test decides. (Clamping the miter onto the cone
-/// instead would tilt the whole planar quad of a long edge off its plane:
-/// measured, a 30% narrower penumbra along a bar's edge.)
+/// instead tilts the whole planar quad of a long edge off its plane and
+/// narrows its penumbra along all of it: tests/test_pvm.py's disk-cut test
+/// across a bar's edge failed with it.)
 fn in_light_cone(v: DVec3, dir: DVec3, d: DVec3, l: DVec3, r: f64) -> DVec3 {
     let to_v = v - l;
     // No geometry touches the light (scene validation): |v - l| > r >= 0.
