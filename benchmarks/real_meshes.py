@@ -142,7 +142,7 @@ def table(renderer: penumbra.Renderer, scenes: dict[str, penumbra.Scene], config
 
 
 def repairs(renderer: penumbra.Renderer, scenes: dict[str, penumbra.Scene], args: argparse.Namespace) -> None:
-    print("\nPenumbra RMSE (stray %) per repair level, cumulative; pvm with its defaults, pvmf with the recommended settings\n")
+    print("\nPenumbra RMSE (stray %) [pixels in a volume] per repair level, cumulative; pvm with its defaults, pvmf with the recommended settings\n")
     names = list(scenes)
     print("| method | repairs | " + " | ".join(names) + " |")
     print("|---|---|" + "---|" * len(names))
@@ -154,7 +154,8 @@ def repairs(renderer: penumbra.Renderer, scenes: dict[str, penumbra.Scene], args
                 result = renderer.render(s, method, repairs=level, **base)
                 region = metrics.penumbra_region(truths[n])
                 stray, out_of = metrics.stray_pixels(result.visibility, truths[n], result.object_id >= 0)
-                cells.append(f"{metrics.rmse(result.visibility, truths[n], region):.3f} ({100 * stray / max(out_of, 1):.2f})")
+                volume = result.stats.get("pixels_in_volume", result.stats.get("masked_pixels"))
+                cells.append(f"{metrics.rmse(result.visibility, truths[n], region):.3f} ({100 * stray / max(out_of, 1):.2f}) [{volume}]")
             print(f"| {method} | {level} | " + " | ".join(cells) + " |", flush=True)
 
 
