@@ -1,4 +1,4 @@
-"""The numbers the README and the tests' tolerances rest on, printed.
+"""The numbers the docs (docs/ground_truth.md) and the tests' tolerances rest on, printed.
 
 1. Mitsuba's unshadowed radiance against Penumbra's (relative RMSE, off silhouettes).
 2. The visibility estimator against the closed form of a sphere occluder

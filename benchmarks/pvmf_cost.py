@@ -42,7 +42,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args()
     # CPU clocks around each pass (submitted and waited for alone): lavapipe's
-    # timestamps are not trusted (see the README's notes on timings). No pass
+    # timestamps are not trusted (see the README's "Timings"). No pass
     # cache: every repeat runs every pass.
     renderer = penumbra.Renderer(timing="cpu", pass_cache=False)
     print(f"adapter {renderer.adapter_info['name']}; scene {args.scene} at {args.size}x{args.size}; median of {args.repeats} renders\n")

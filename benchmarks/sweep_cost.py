@@ -6,7 +6,7 @@ first configuration runs every pass), and one by one from scratch on a
 renderer built with `pass_cache=False`. Prints the wall-clock time per
 configuration of each and their ratio, and checks the images are identical.
 
-    python benchmarks/sweep_cost.py            # the README's numbers
+    python benchmarks/sweep_cost.py            # the numbers of docs/sweeps.md
     python benchmarks/sweep_cost.py --quick    # small, for a smoke test
 """
 

@@ -13,18 +13,21 @@ import penumbra
 SIZE = 32
 MAP = 256
 
-# Per method: parameters that keep a render cheap on lavapipe (reference:
-# 16 light samples instead of 256).
-FAST: dict[str, dict[str, Any]] = {
-    "hard": {"map_size": MAP},
-    "pcf": {"map_size": MAP},
-    "pcss": {"map_size": MAP},
-    "pvm": {"map_size": MAP},
+# Every registered method, so that a method is stress-tested from the day it
+# is registered. Its parameters keep a render cheap on lavapipe: a small map
+# for every method that takes `map_size`, and per method what else is costly.
+METHODS = penumbra.methods()
+CHEAPER: dict[str, dict[str, Any]] = {
     # n_blur is in pixels: the default 12 spans a whole shadow at 32 px.
-    "pvmf": {"map_size": MAP, "n_blur": 2},
-    "reference": {"map_size": MAP, "n_samples": 16},
+    "pvmf": {"n_blur": 2},
+    # 16 light samples instead of 256.
+    "reference": {"n_samples": 16},
 }
-METHODS = list(FAST)
+FAST: dict[str, dict[str, Any]] = {
+    m: {**({"map_size": MAP} if "map_size" in penumbra.method_info(m).defaults() else {}), **CHEAPER.get(m, {})} for m in METHODS
+}
+# Methods that build silhouettes from mesh topology (they take `open_edges`).
+VOLUME_METHODS = {m for m in METHODS if "open_edges" in penumbra.method_info(m).defaults()}
 
 MESHES = Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes"
 

@@ -1,8 +1,15 @@
 """Every bad input gets its typed exception with a message naming the problem
-(issue 2; SPEC and DEVELOPERS.md's list). None crashes the interpreter."""
+(issue 2; SPEC and DEVELOPERS.md's list; issue 22's hardening). None crashes
+the interpreter, and none escapes the exception hierarchy as a bare
+TypeError, ValueError or UnicodeEncodeError."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import warnings
+from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
@@ -10,7 +17,7 @@ import pytest
 
 import penumbra
 from penumbra import CameraError, LightError, MeshError, ParameterError, SceneError
-from penumbra.scenes import box, ground_plane, sphere
+from penumbra.scenes import box, ground_plane, ground_slab, sphere
 
 QUAD_V = np.array([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], dtype=np.float32)
 QUAD_F = np.array([[0, 2, 1], [0, 3, 2]])
@@ -71,6 +78,39 @@ def empty_file() -> str:
     return "empty.obj"
 
 
+def text_file(name: str, text: str) -> str:
+    with open(name, "w") as f:
+        f.write(text)
+    return name
+
+
+def folder(name: str) -> str:
+    os.mkdir(name)
+    return name
+
+
+def light_replaced(**attributes: Any) -> penumbra.Scene:
+    """A scene whose light has public attributes overwritten after construction."""
+    light = penumbra.SphereLight((0.3, 3, 0.2), 0.3, intensity=10)
+    for name, value in attributes.items():
+        setattr(light, name, value)
+    return penumbra.Scene([quad()], light, CAMERA)
+
+
+def scaled_default_scene(scale: float) -> penumbra.Scene:
+    """sphere_on_plane with every coordinate and the light's radius times ``scale``."""
+    base = penumbra.scenes.get("sphere_on_plane", width=16, height=16)
+    meshes = [
+        penumbra.Mesh(m.vertices, m.faces, transform=np.diag([scale, scale, scale, 1.0]) @ m.transform.astype(np.float64), name=m.name)
+        for m in base.meshes
+    ]
+    light = penumbra.SphereLight(base.light.center.astype(np.float64) * scale, base.light.radius * scale, intensity=base.light.intensity)
+    assert base.camera is not None
+    c = base.camera
+    camera = penumbra.Camera(np.asarray(c.eye) * scale, np.asarray(c.target) * scale, c.up, c.fov_y, c.width, c.height)
+    return penumbra.Scene(meshes, light, camera)
+
+
 # (id, action, exception, words the message must contain)
 CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     # Meshes
@@ -91,7 +131,7 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("albedo_range", render([quad(albedo=1.5)]), MeshError, ["albedo", "[0, 1]"]),
     ("albedo_nan", render([quad(albedo=(0.5, np.nan, 0.5))]), MeshError, ["albedo"]),
     ("albedo_shape", lambda r: quad(albedo=(0.5, 0.5)), MeshError, ["albedo", "shape (3)"]),
-    ("object_id_negative", render([quad(object_id=-1)]), MeshError, ["object_id", ">= 0"]),
+    ("object_id_negative", lambda r: quad(object_id=-1), MeshError, ["object_id", ">= 0"]),
     ("object_id_type", lambda r: quad(object_id=1.5), MeshError, ["object_id", "integer"]),
     ("transform_singular", render([quad(transform=np.diag([1, 0, 1, 1]))]), MeshError, ["singular"]),
     ("transform_projective", render([quad(transform=[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0.5, 1]])]), MeshError, ["affine"]),
@@ -111,10 +151,10 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("radiance_and_intensity", lambda r: penumbra.SphereLight((0, 3, 0), 1.0, radiance=1, intensity=1), LightError, ["exactly one"]),
     ("light_intersects_mesh", render(light=penumbra.SphereLight((0, 0.2, 0), 0.3, intensity=1)), SceneError, ["intersects mesh 'quad'"]),
     ("point_light_on_surface", render(light=penumbra.SphereLight((0.5, 0, 0.5), 0.0, intensity=1)), SceneError, ["intersects"]),
-    ("geometry_surrounds_light", render([ground_plane(), sphere((0, 1, 0), 0.5)], light=penumbra.SphereLight((0, 0.3, 0), 0.1, intensity=1)), SceneError, ["surrounds the light"]),
+    ("geometry_surrounds_light_one_frustum", render([ground_plane(), sphere((0, 1, 0), 0.5)], light=penumbra.SphereLight((0, 0.3, 0), 0.1, intensity=1), projection="frustum"), SceneError, ["surrounds the light", "projection='auto'"]),
     # Cameras and images
-    ("zero_width", render(camera=CAMERA.with_size(0, 32)), CameraError, ["at least 1x1", "0x32"]),
-    ("zero_height", render(camera=CAMERA.with_size(32, 0)), CameraError, ["0"]),
+    ("zero_width", lambda r: CAMERA.with_size(0, 32), CameraError, ["at least 1x1", "0x32"]),
+    ("zero_height", lambda r: CAMERA.with_size(32, 0), CameraError, ["0"]),
     ("negative_width", lambda r: CAMERA.with_size(-5, 32), CameraError, ["width"]),
     ("width_type", lambda r: CAMERA.with_size(32.5, 32), CameraError, ["width", "integer"]),
     ("huge_image", render(camera=CAMERA.with_size(100_000, 100_000)), CameraError, ["exceeds"]),
@@ -170,7 +210,8 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("intensity_nan", render(light=penumbra.SphereLight((0, 3, 0), 0.3, intensity=(1, np.nan, 1))), LightError, ["intensity", "finite"]),
     ("radiance_overflows_intensity", render(light=penumbra.SphereLight((0, 1e19, 0), 1e18, radiance=1e30)), LightError, ["intensity", "finite"]),
     ("huge_radius_swallows_scene", render(light=penumbra.SphereLight((0, 3, 0), 1e6, intensity=1)), SceneError, ["intersects mesh 'quad'"]),
-    ("light_inside_closed_box", render([box((0, 1, 0), (2, 2, 2), name="room")], light=penumbra.SphereLight((0, 1, 0), 0.2, intensity=1), method="pvm"), SceneError, ["surrounds the light"]),
+    ("light_inside_closed_box_one_frustum", render([box((0, 1, 0), (2, 2, 2), name="room")], light=penumbra.SphereLight((0, 1, 0), 0.2, intensity=1), method="pvm", projection="frustum"), SceneError, ["surrounds the light"]),
+    ("projection_unknown", render(projection="sphere"), ParameterError, ["projection", "'auto', 'frustum', 'cube'"]),
     ("fov_negative", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=-10, width=8, height=8)), CameraError, ["fov_y"]),
     ("fov_nan", render(camera=penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y=float("nan"), width=8, height=8)), CameraError, ["fov_y"]),
     ("fov_string", lambda r: penumbra.Camera((0, 4, 6), (0, 0, 0), fov_y="wide"), CameraError, ["fov_y", "real number"]),
@@ -206,6 +247,58 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("mesh_file_empty", lambda r: penumbra.scenes.from_mesh(empty_file()), MeshError, ["empty.obj"]),
     ("mesh_file_is_a_folder", lambda r: penumbra.scenes.from_mesh("."), MeshError, ["cannot read mesh file"]),
     ("scene_size_zero", lambda r: r.render(penumbra.scenes.get("sphere_on_plane", width=0, height=8)), CameraError, ["at least 1x1"]),
+    # Issue 22: huge coordinates (item 5) name the range, not "180 degrees off the axis".
+    ("scene_scaled_by_1e20", lambda r: r.render(scaled_default_scene(1e20)), penumbra.InvalidInputError, ["supported range", "float32", "scale the scene down"]),
+    ("sphere_of_1e38", render([ground_slab(), sphere((0, 1e38, 0), 1e37)]), MeshError, ["'sphere'", "vertex", "supported range", "float32"]),
+    ("light_beyond_range", render(light=penumbra.SphereLight((0, 3e18, 0), 0.3, intensity=1)), LightError, ["supported range"]),
+    ("camera_beyond_range", render(camera=penumbra.Camera((0, 4e18, 6), (0, 0, 0), width=8, height=8)), CameraError, ["eye", "supported range"]),
+    ("scene_below_smallest_extent", render([quad(transform=np.diag([1e-20, 1e-20, 1e-20, 1]))], light=penumbra.SphereLight((0, 1e-19, 0), 0.0, intensity=1e-40)), SceneError, ["spans only", "scale the scene up"]),
+    # Item 6: reference's refusal (with one frustum per sample, as every method's was before
+    # cube maps) says which sample and what to do.
+    ("reference_sample_outside_one_frustum", render([ground_slab()], light=penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), method="reference", n_samples=16, map_size=256, projection="frustum"), SceneError, ["method 'reference'", "light sample", " of ", "degrees off", "projection='auto'", "smaller radius"]),
+    # Item 8: light attributes replaced after construction are checked again.
+    ("light_center_replaced_none", lambda r: r.render(light_replaced(center=None)), LightError, ["light center", "numeric"]),
+    ("light_intensity_replaced_shape", lambda r: r.render(light_replaced(intensity=[1, 2])), LightError, ["light intensity", "shape (3)"]),
+    ("light_radius_replaced_string", lambda r: r.render(light_replaced(radius="0.5")), LightError, ["light radius", "real number", "'0.5'"]),
+    ("light_radius_replaced_negative", lambda r: r.render(light_replaced(radius=-1.0)), LightError, ["light radius", ">= 0"]),
+    # Item 9: object ids outside int32, at construction and after replacement.
+    ("object_id_2_63", lambda r: quad(object_id=2**63), MeshError, ["object_id", "2147483647", "9223372036854775808"]),
+    ("object_id_uint64_max", lambda r: quad(object_id=np.uint64(2**64 - 1)), MeshError, ["object_id", "18446744073709551615"]),
+    ("object_id_replaced_2_40", render([replaced(quad(), object_id=2**40)]), MeshError, ["object_id", "2147483647"]),
+    # Item 10: no bare TypeError, ValueError or UnicodeEncodeError.
+    ("scene_meshes_none", lambda r: penumbra.Scene(None, LIGHT, CAMERA), SceneError, ["meshes", "NoneType"]),
+    ("scene_meshes_int", lambda r: penumbra.Scene(5, LIGHT, CAMERA), SceneError, ["meshes", "int"]),
+    ("timing_none", lambda r: penumbra.Renderer(timing=None), ParameterError, ["timing", "'auto' or 'cpu'", "None"]),
+    ("scene_name_list", lambda r: penumbra.scenes.get(["x"]), ParameterError, ["unknown scene", "['x']"]),
+    ("sweep_params_int", lambda r: penumbra.sweep(penumbra.Scene([quad()], LIGHT, CAMERA), "hard", params=5, renderer=r, progress=False), ParameterError, ["params must be", "int"]),
+    ("sweep_scenes_int", lambda r: penumbra.sweep(5, "hard", renderer=r, progress=False), SceneError, ["scenes must be", "int"]),
+    ("write_image_path_none", lambda r: penumbra.write_image(None, np.zeros((2, 2), np.float32)), ParameterError, ["path", "NoneType"]),
+    ("write_image_string_image", lambda r: penumbra.write_image("a.png", "abc"), ParameterError, ["image", "numeric", "<U3"]),
+    ("mesh_name_lone_surrogate", lambda r: quad(name="wing\udc80"), MeshError, ["mesh name", "not valid Unicode"]),
+    ("mesh_name_replaced_surrogate", render([replaced(quad(), name="wing\udc80")]), MeshError, ["mesh name", "not valid Unicode"]),
+    # Item 11: parameter messages as Python writes the value, integers beyond int64 as integers.
+    ("param_str_for_int", render(map_size="abc"), ParameterError, ["map_size", "got str 'abc'"]),
+    ("param_float_for_int", render(map_size=256.0), ParameterError, ["map_size", "got float 256.0"]),
+    ("param_bool_for_float", render(normal_offset=True), ParameterError, ["normal_offset", "got bool True"]),
+    ("param_int_beyond_int64", render(method="pcf", seed=2**63), ParameterError, ["seed", "an integer in [0, 4294967295]", "got int 9223372036854775808"]),
+    ("param_uint64_beyond_int64", render(method="pcf", seed=np.uint64(2**64 - 1)), ParameterError, ["seed", "got int 18446744073709551615"]),
+    ("param_float_param_given_huge_int", render(method="pcf", kernel=2**70), ParameterError, ["kernel", "a number in", "got int 1180591620717411303424"]),
+    # Item 12: accepted silently before.
+    ("intermediates_string", render(intermediates="no"), ParameterError, ["intermediates", "True or False", "'no'"]),
+    ("intermediates_int", render(intermediates=1), ParameterError, ["intermediates", "True or False"]),
+    ("pass_cache_string", lambda r: penumbra.Renderer(pass_cache="no"), ParameterError, ["pass_cache", "True or False", "'no'"]),
+    ("png_nan", lambda r: penumbra.write_image("out.png", np.full((2, 2), np.nan, np.float32)), ParameterError, ["non-finite", "NaN", "row 0, column 0"]),
+    ("png_inf", lambda r: penumbra.write_image("out.png", np.array([[0.5, np.inf]], np.float32)), ParameterError, ["non-finite", "row 0, column 1"]),
+    ("png_object_dtype", lambda r: penumbra.write_image("out.png", np.array([[1.0, None]], dtype=object)), ParameterError, ["numeric", "object"]),
+    ("npy_object_dtype", lambda r: penumbra.write_image("out.npy", np.array([[1.0, None]], dtype=object)), ParameterError, ["numeric", "object"]),
+    ("sweep_keep_unknown_image", lambda r: penumbra.sweep(penumbra.Scene([quad()], LIGHT, CAMERA), "hard", keep_images=["nope"], renderer=r, progress=False), ParameterError, ["keep_images", "nope", "radiance"]),
+    ("faces_timedelta", lambda r: quad(faces=QUAD_F.astype("timedelta64[s]")), MeshError, ["faces", "integers", "timedelta64"]),
+    ("camera_with_size_0_0", lambda r: CAMERA.with_size(0, 0), CameraError, ["at least 1x1", "0x0"]),
+    # Item 7: .npy output errors are PenumbraIOError, as .png's are.
+    ("npy_into_missing_folder", lambda r: penumbra.write_image("no/such/dir/out.npy", np.zeros((2, 2), np.float32)), penumbra.PenumbraIOError, ["no/such/dir/out.npy"]),
+    ("npy_onto_a_folder", lambda r: penumbra.write_image(folder("out.npy"), np.zeros((2, 2), np.float32)), penumbra.PenumbraIOError, ["out.npy"]),
+    # Item 13: a mesh file with a vertex beyond float32's range names it.
+    ("mesh_file_vertex_1e39", lambda r: penumbra.scenes.from_mesh(text_file("far.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1e39\nf 1 2 3\n")), MeshError, ["far.obj", "vertex 2", "1e+39", "float32"]),
 ]
 
 
@@ -230,3 +323,96 @@ def test_renderer_still_works_after_errors(renderer: penumbra.Renderer) -> None:
             action(renderer)
     result = render()(renderer)
     assert np.isfinite(result.radiance).all() and result.visibility.max() == 1.0
+
+
+# Issue 22, beyond the table above.
+
+
+@pytest.mark.parametrize("target", ["missing/out.npy", "folder.npy"])
+def test_cli_npy_output_errors_exit_2_with_one_line(target: str, tmp_path: Path) -> None:
+    """Item 7: the README promises exit 2 and one line for every error."""
+    (tmp_path / "folder.npy").mkdir()
+    done = subprocess.run(
+        [sys.executable, "-m", "penumbra", "render", "--width", "8", "--height", "8", "--param", "map_size=256", "-o", target],
+        capture_output=True, text=True, timeout=300, cwd=tmp_path,
+    )
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("penumbra: error: ") and target in lines[0], done.stderr
+
+
+def test_light_attributes_replaced_with_other_dtypes_are_coerced(renderer: penumbra.Renderer) -> None:
+    """Item 8: a float64 centre (or a list, or an int radius) renders as the
+    float32 original does, as mesh attributes already did."""
+    original = penumbra.Scene([quad()], penumbra.SphereLight((0.3, 3, 0.2), 0.5, intensity=10), CAMERA)
+    expected = renderer.render(original, map_size=256).visibility
+    replaced_light = light_replaced(center=np.array([0.3, 3.0, 0.2]), intensity=[10, 10, 10])
+    replaced_light.light.radius = 0.5
+    np.testing.assert_array_equal(renderer.render(replaced_light, map_size=256).visibility, expected)
+
+
+def test_write_image_takes_bytes_paths(tmp_path: Path) -> None:
+    """Item 10: a bytes path is a path (os.fsdecode), for every format."""
+    for name in ("a.png", "a.exr", "a.npy"):
+        path = os.fsencode(tmp_path / name)
+        penumbra.write_image(path, np.full((2, 3), 0.5, np.float32))
+        assert (tmp_path / name).stat().st_size > 0
+
+
+@pytest.mark.parametrize(
+    "call, error, words",
+    [
+        (lambda core, r: core.Renderer(timing=5), ParameterError, ["timing"]),
+        (lambda core, r: core.Renderer(pass_cache=1), ParameterError, ["pass_cache", "True or False"]),
+        (lambda core, r: r._core.render(None, None, "hard", {}), SceneError, ["scene"]),
+        (lambda core, r: r._core.render(core_scene(), None, "hard", {}), CameraError, ["camera"]),
+        (lambda core, r: r._core.render(core_scene(vertices=QUAD_V.astype(np.float64)), CAMERA._core_value(), "hard", {}), MeshError, ["meshes[0]", "vertices"]),
+        (lambda core, r: r._core.render(core_scene(vertices=QUAD_V[:, :2].copy()), CAMERA._core_value(), "hard", {}), MeshError, ["'quad'", "vertices", "(N, 3)"]),
+        (lambda core, r: r._core.render(core_scene(), CAMERA._core_value(), 5, {}), ParameterError, ["method"]),
+        (lambda core, r: r._core.render(core_scene(), CAMERA._core_value(), "hard", [("map_size", 256)]), ParameterError, ["params must be a dict"]),
+        (lambda core, r: r._core.render(core_scene(), CAMERA._core_value(), "hard", {1: 256}), ParameterError, ["parameter name"]),
+        (lambda core, r: r._core.render(core_scene(), CAMERA._core_value(), "pcf", {"seed": 2**63}), ParameterError, ["seed", "integer 9223372036854775808", "64-bit"]),
+        (lambda core, r: core.write_image(None, np.zeros((2, 2), np.float32)), ParameterError, ["path"]),
+        (lambda core, r: core.write_image("a.png", np.zeros((2, 2), np.float64)), ParameterError, ["image", "float32"]),
+    ],
+)
+def test_the_binding_raises_typed_errors_only(renderer: penumbra.Renderer, call: Callable[..., Any], error: type[Exception], words: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 16 and item 10: conversion errors in penumbra._core itself (the
+    values penumbra.scene builds, handed in wrong) are typed, not TypeError."""
+    from penumbra import _core
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(error) as info:
+        call(_core, renderer)
+    for word in words:
+        assert word in str(info.value), f"{word!r} not in {info.value}"
+
+
+def core_scene(**mesh: Any) -> Any:
+    from dataclasses import replace as replace_fields
+
+    value = penumbra.Scene([quad()], LIGHT, CAMERA)._core_value()
+    return replace_fields(value, meshes=[replace_fields(value.meshes[0], **mesh)])
+
+
+def test_mesh_file_beyond_float32_warns_nothing(tmp_path: Path) -> None:
+    """Item 13: the error names the coordinate; trimesh's cast warning does not reach the caller."""
+    path = text_file(str(tmp_path / "far.obj"), "v 0 0 0\nv 1 0 0\nv 0 0 1e39\nf 1 2 3\n")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(MeshError, match="vertex 2"):
+            penumbra.scenes.from_mesh(path)
+    assert not caught, [str(w.message) for w in caught]
+
+
+def test_the_scene_reference_refuses_renders_with_every_other_method(renderer: penumbra.Renderer) -> None:
+    """Item 6: with one frustum per map, the light's centre sees the slab
+    within it and only reference's samples on the light's sphere do not
+    (its refusal above); each remedy the message names works here."""
+    scene = penumbra.Scene([ground_slab()], penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), CAMERA)
+    for method in penumbra.methods():
+        if method != "reference":
+            renderer.render(scene, method, map_size=256, projection="frustum")
+    renderer.render(scene, "reference", n_samples=16, map_size=256)  # projection="auto": cube faces
+    renderer.render(scene.with_light(scene.light.with_radius(0.1)), "reference", n_samples=16, map_size=256, projection="frustum")
+    renderer.render(scene.with_light(penumbra.SphereLight((0, 1.8, 0), 0.3, intensity=10)), "reference", n_samples=16, map_size=256, projection="frustum")

@@ -9,8 +9,10 @@ from pathlib import Path
 
 import pytest
 
+import penumbra.grid
 from penumbra import bench, cli
 from penumbra import mitsuba as pm
+from penumbra.sweep import grid
 from penumbra.errors import ParameterError
 
 CONFIG = Path(__file__).resolve().parents[1] / "benchmarks" / "bench.toml"
@@ -36,6 +38,9 @@ def test_time_at_error_interpolates_log_log_and_marks_bounds() -> None:
 def test_grids_expand_to_their_product_without_repeats() -> None:
     grids = [{"a": [1, 2], "b": "x"}, {}, {"a": 1, "b": "x"}]
     assert bench.expand(grids) == [{"a": 1, "b": "x"}, {"a": 2, "b": "x"}, {}]
+    # One expander for bench and sweep: the same sets, bench dropping repeats.
+    assert bench.expand(grids) == penumbra.grid.expand(grids, unique=True)
+    assert penumbra.grid.expand(grids) == grid(grids)
     assert bench.label({}) == "default"
     assert bench.label({"n_blur": 0, "kernel": "disk"}) == "kernel=disk n_blur=0"
 
@@ -88,6 +93,9 @@ def test_quick_run_writes_every_output_and_its_numbers_hold(renderer: object, tm
     assert {r["method"] for r in rows} == set(cfg.methods) | {"reference", "mitsuba"}
     hard = [r for r in rows if r["method"] == "hard" and r["label"] == "default"]
     assert len(hard) == 1 and float(hard[0]["time_over_hard"]) == 1.0
+    # The row schema sweeps share (penumbra.grid.result_columns): ms_<pass>, stat_<name>, reused.
+    assert float(hard[0]["ms_gbuffer"]) > 0 and float(hard[0]["stat_map_size"]) > 0 and hard[0]["reused"] == ""
+    assert not any(k.startswith("time_") and k != "time_over_hard" for k in rows[0])
     for r in rows:
         assert float(r["total_ms"]) > 0 and 0 <= float(r[bench.ERROR]) < 1, r
         assert float(r["noise_visibility_rmse_penumbra"]) >= 0

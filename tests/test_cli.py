@@ -112,3 +112,14 @@ def test_listing_commands() -> None:
     assert run("scenes").stdout.split() == penumbra.scenes.names()
     assert "hard" in run("methods").stdout.split()
     assert '"backend"' in run("info").stdout
+
+
+def test_render_defaults_to_pcss_and_says_what_it_did(tmp_path: Path) -> None:
+    # Issue 23: a soft method by default, its parameters, and a warm time
+    # (the median of the timed renders after a warm-up), the first render apart.
+    done = run("render", "--width", "32", "--height", "32", "-o", str(tmp_path / "r.png"))
+    assert done.returncode == 0, done.stderr
+    assert "method pcss" in done.stdout and '"filter_samples": 6' in done.stdout
+    assert "warm time" in done.stdout and "median of 5 after a warm-up render" in done.stdout and "first render" in done.stdout
+    once = run("render", "--width", "32", "--height", "32", "--repeats", "0", "-o", str(tmp_path / "r.png"))
+    assert once.returncode == 0 and "warm time" not in once.stdout and "the first" in once.stdout

@@ -111,7 +111,7 @@ def test_hard_shadow_outline_matches_the_analytic_projection(renderer: penumbra.
 def test_hard_matches_exact_ray_casting_beyond_the_outline(renderer: penumbra.Renderer, name: str) -> None:
     # With its default bias, `hard` at radius 0 agrees with CPU ray casting of
     # the light's centre everywhere but a one-pixel band along shadow outlines:
-    # no acne, no light leaks (the table in the README comes from
+    # no acne, no light leaks (the table in docs/methods/hard.md comes from
     # benchmarks/bias_study.py, the same comparison at 256x256).
     scene = penumbra.scenes.get(name, width=128, height=128, light_radius=0.0)
     result = renderer.render(scene)

@@ -152,7 +152,7 @@ def test_pcss_beats_hard_against_ground_truth(renderer: penumbra.Renderer, cache
     pcss = metrics.compare(renderer.render(scene, "pcss"), gt)["visibility_rmse_penumbra"]
     pcf = metrics.compare(renderer.render(scene, "pcf"), gt)["visibility_rmse_penumbra"]
     # Measured here: penumbra RMSE hard 0.276, pcf 0.261 (a 5-texel kernel
-    # barely softens), pcss 0.145; the README's method table has 256x256.
+    # barely softens), pcss 0.145; the method table of docs/benchmark.md has 256x256.
     assert pcss < 0.6 * hard, (pcss, hard)
     assert pcf < hard, (pcf, hard)
 

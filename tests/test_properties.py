@@ -1,7 +1,8 @@
 """Property-based tests of every method on random scenes (issue 8).
 
 Scenes: a closed caster (sphere, box or needle-thin box), sometimes a second
-one touching or intersecting it, over a ground slab; scales from 1e-3 to 1e4;
+one touching or intersecting it, over a ground slab; scales from 1e-7 to 1e10
+(issue 22), and the ends of that range for every method on fixed scenes;
 light radius from 0 to larger than the casters; the light's surface from
 1e-3 to 5 caster sizes off the caster; light elevations down to grazing.
 Invariants: no NaN or Inf in any image, visibility in [0, 1], identical
@@ -22,7 +23,7 @@ from typing import Any
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import HealthCheck, given, reject, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import penumbra
@@ -118,24 +119,28 @@ def scene_specs(draw: st.DrawFn) -> SceneSpec:
 
 
 def render(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str, **extra: object) -> penumbra.RenderResult:
-    """Renders, or rejects the example when the scene is refused for the one
-    documented reason a valid random scene can have: a light near the
-    caster sees the slab beyond the 80-degree half-angle of one shadow-map
-    frustum (a typed SceneError naming it; omnidirectional maps are not
-    implemented)."""
-    try:
-        return renderer.render(scene, method, **{**FAST[method], **extra})
-    except penumbra.SceneError as e:
-        assert "surrounds the light" in str(e), e
-        reject()
-        raise
+    """Renders: every valid random scene renders (a light near the caster
+    that sees the slab beyond one frustum's 80 degrees takes cube faces)."""
+    return renderer.render(scene, method, **{**FAST[method], **extra})
 
 
 CI = settings(max_examples=3, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])
 LONG = settings(max_examples=40, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])
 
-# Log10 of the uniform scale of the whole scene, from 1e-3 to 1e4.
-SCALES = st.integers(-3, 4)
+# Log10 of the uniform scale of the whole scene, from 1e-7 to 1e10 (issue
+# 22: a scene 1e-7 across was refused as "the light intersects mesh" by an
+# absolute tolerance). The core enforces what lies beyond: coordinates past
+# +-1e18 and scenes less than 1e-18 across are refused with a typed error
+# naming float32 (tests/test_bad_input.py); `benchmarks/scale_limits.py`
+# measured where visibility goes wrong without those bounds (docs/stability.md).
+MIN_EXPONENT, MAX_EXPONENT = -7, 10
+# pvm's visibility changed at 1e10 (0.054 of the pixels by more than 0.1 on
+# FIXED_SPEC at 32 px) until its cutting plane was built from unit vectors
+# (issue 22 item 1, docs/real_meshes.md); every method now spans the range.
+
+
+def scales(method: str) -> st.SearchStrategy[int]:
+    return st.integers(MIN_EXPONENT, MAX_EXPONENT)
 
 
 def _finite_in_range_and_deterministic(renderer: penumbra.Renderer, spec: SceneSpec, exponent: int, method: str) -> None:
@@ -149,17 +154,17 @@ def _finite_in_range_and_deterministic(renderer: penumbra.Renderer, spec: SceneS
 
 @pytest.mark.parametrize("method", METHODS)
 @CI
-@given(spec=scene_specs(), exponent=SCALES)
-def test_random_scenes_are_finite_in_range_and_deterministic(renderer: penumbra.Renderer, method: str, spec: SceneSpec, exponent: int) -> None:
-    _finite_in_range_and_deterministic(renderer, spec, exponent, method)
+@given(spec=scene_specs(), data=st.data())
+def test_random_scenes_are_finite_in_range_and_deterministic(renderer: penumbra.Renderer, method: str, spec: SceneSpec, data: st.DataObject) -> None:
+    _finite_in_range_and_deterministic(renderer, spec, data.draw(scales(method), label="exponent"), method)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 @LONG
-@given(spec=scene_specs(), exponent=SCALES)
-def test_random_scenes_are_finite_in_range_and_deterministic_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec, exponent: int) -> None:
-    _finite_in_range_and_deterministic(renderer, spec, exponent, method)
+@given(spec=scene_specs(), data=st.data())
+def test_random_scenes_are_finite_in_range_and_deterministic_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec, data: st.DataObject) -> None:
+    _finite_in_range_and_deterministic(renderer, spec, data.draw(scales(method), label="exponent"), method)
 
 
 # Visibility of the same scene at another scale and place. Measured by
@@ -201,17 +206,65 @@ def _scale_and_translation_invariant(renderer: penumbra.Renderer, spec: SceneSpe
 
 @pytest.mark.parametrize("method", METHODS)
 @CI
-@given(spec=scene_specs(), exponent=SCALES)
-def test_uniform_scale_and_translation_leave_visibility_unchanged(renderer: penumbra.Renderer, method: str, spec: SceneSpec, exponent: int) -> None:
-    _scale_and_translation_invariant(renderer, spec, exponent, method)
+@given(spec=scene_specs(), data=st.data())
+def test_uniform_scale_and_translation_leave_visibility_unchanged(renderer: penumbra.Renderer, method: str, spec: SceneSpec, data: st.DataObject) -> None:
+    _scale_and_translation_invariant(renderer, spec, data.draw(scales(method), label="exponent"), method)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 @LONG
-@given(spec=scene_specs(), exponent=SCALES)
-def test_uniform_scale_and_translation_leave_visibility_unchanged_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec, exponent: int) -> None:
+@given(spec=scene_specs(), data=st.data())
+def test_uniform_scale_and_translation_leave_visibility_unchanged_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec, data: st.DataObject) -> None:
+    _scale_and_translation_invariant(renderer, spec, data.draw(scales(method), label="exponent"), method)
+
+
+# The ends of the range for every method, on fixed scenes (the derandomized
+# CI examples above need not reach them): a box with a touching second box,
+# and a needle under a light wider than itself.
+FIXED_SPECS = [
+    SceneSpec("box", 1.0, 1.5, 20.0, "touching", 0.3, 1.0, 70.0, 30.0),
+    SceneSpec("needle", 0.8, 1.2, 45.0, "none", 1.2, 0.5, 80.0, 200.0),
+]
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("exponent", [MIN_EXPONENT, MAX_EXPONENT])
+@pytest.mark.parametrize("spec", FIXED_SPECS, ids=["box", "needle"])
+def test_the_ends_of_the_scale_range_leave_visibility_unchanged(renderer: penumbra.Renderer, method: str, exponent: int, spec: SceneSpec) -> None:
+    _finite_in_range_and_deterministic(renderer, spec, exponent, method)
     _scale_and_translation_invariant(renderer, spec, exponent, method)
+
+
+def translated_default_scene(offset: float, scale: float = 1.0) -> penumbra.Scene:
+    """sphere_on_plane moved by ``offset`` along every axis (and scaled by
+    ``scale`` about the origin first), as issue 22 reported it."""
+    base = penumbra.scenes.get("sphere_on_plane", width=SIZE, height=SIZE)
+    move = np.diag([scale, scale, scale, 1.0])
+    move[:3, 3] = offset
+    meshes = [penumbra.Mesh(m.vertices, m.faces, transform=move @ m.transform.astype(np.float64), object_id=i, name=m.name) for i, m in enumerate(base.meshes)]
+    light = penumbra.SphereLight(base.light.center.astype(np.float64) * scale + offset, base.light.radius * scale, intensity=base.light.intensity)
+    assert base.camera is not None
+    c = base.camera
+    camera = penumbra.Camera(np.asarray(c.eye) * scale + offset, np.asarray(c.target) * scale + offset, c.up, c.fov_y, SIZE, SIZE)
+    return penumbra.Scene(meshes, light, camera)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_scene_1e7_from_the_origin_or_1e7_smaller_renders(renderer: penumbra.Renderer, method: str) -> None:
+    """Issue 22 item 4: both were refused ("the light intersects mesh
+    'ground'") by an absolute tolerance. Scaled by 1e-7 the visibility is the
+    scale-1 visibility; 1e7 from the origin float32 resolves one unit, so the
+    scene renders as rounded there (the sphere's shadow still falls on the ground)."""
+    base = renderer.render(translated_default_scene(0.0), method, **FAST[method])
+    tiny = renderer.render(translated_default_scene(0.0, scale=1e-7), method, **FAST[method])
+    check_images(tiny, "scaled by 1e-7")
+    frac, mean = visibility_difference(base.visibility, tiny.visibility)
+    assert frac <= MISMATCH_FRACTION and mean <= MEAN_DIFFERENCE, (frac, mean)
+    far = renderer.render(translated_default_scene(1e7), method, **FAST[method])
+    check_images(far, "translated by 1e7")
+    ground = far.object_id == 0
+    assert (far.visibility[ground] < 0.5).any() and (far.visibility[ground] == 1.0).any()
 
 
 WORST_PVMF_SCENE = SceneSpec("sphere", 1.2829627341064935, 2.1686630364650665, 61.79789065224047, "touching", 2.2453816619167126, 0.01, 79.80142386110028, 133.13616364973657)

@@ -24,3 +24,60 @@ def test_readme_python_example_runs(renderer: penumbra.Renderer, tmp_path: Path,
     assert result.radiance.shape == (256, 256, 3) and np.isfinite(result.radiance).all()
     assert {1, 2} <= set(np.unique(result.object_id)), "both casters are in view"
     assert (result.visibility[result.object_id == 0] == 0).any(), "they cast shadows"
+
+
+ROOT = README.parent
+LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
+
+
+def _slug(heading: str) -> str:
+    """GitHub's anchor for a heading: lower case, punctuation dropped, spaces to hyphens."""
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower())
+    return text.replace(" ", "-")
+
+
+def _anchors(path: Path) -> set[str]:
+    text = re.sub(r"```.*?```", "", path.read_text(), flags=re.S)
+    return {_slug(m.group(2)) for m in re.finditer(r"^(#+)\s+(.*)$", text, flags=re.M)}
+
+
+def _documents() -> list[Path]:
+    return [README, *sorted((ROOT / "docs").rglob("*.md"))]
+
+
+@pytest.mark.parametrize("doc", _documents(), ids=lambda p: str(p.relative_to(ROOT)))
+def test_relative_links_resolve(doc: Path) -> None:
+    # Every relative link and image of the README and docs/ names a file of
+    # the repository (and, for a Markdown file, a heading that exists).
+    text = re.sub(r"```.*?```", "", doc.read_text(), flags=re.S)
+    text = re.sub(r"`[^`\n]*`", "", text)
+    broken = []
+    for target in LINK.findall(text):
+        if re.match(r"^[a-z][a-z0-9+.-]*:", target):  # http:, https:, mailto:
+            continue
+        path, _, anchor = target.partition("#")
+        resolved = (doc.parent / path).resolve() if path else doc
+        if not resolved.exists() or ROOT not in [resolved, *resolved.parents]:
+            broken.append(target)
+        elif anchor and resolved.suffix == ".md" and anchor not in _anchors(resolved):
+            broken.append(target)
+    assert not broken, f"{doc.relative_to(ROOT)}: broken links {broken}"
+
+
+def test_readme_is_a_front_page() -> None:
+    text = README.read_text()
+    assert len(text.splitlines()) <= 250
+    # Its first command, and the picture that command writes, committed.
+    assert "bash scripts/setup.sh && python3 -m penumbra compare -o compare.png" in text
+    assert "](docs/images/compare.png)" in text and (ROOT / "docs" / "images" / "compare.png").exists()
+    # Every implemented method has a row linked to its page.
+    for method in penumbra.methods():
+        assert f"[`{method}`](docs/methods/{method}.md)" in text, method
+
+
+def test_parameter_page_is_current() -> None:
+    """docs/parameters.md is what the registry declares today."""
+    from penumbra.cli import parameters_markdown
+
+    page = ROOT / "docs" / "parameters.md"
+    assert page.read_text() == parameters_markdown(), "regenerate: python -m penumbra methods --markdown > docs/parameters.md"

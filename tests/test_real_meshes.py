@@ -20,7 +20,7 @@ import pytest
 
 import penumbra
 from penumbra import metrics
-from stress_scenes import FAST, MESHES, METHODS, check_images
+from stress_scenes import FAST, MESHES, METHODS, VOLUME_METHODS, check_images
 
 # mesh file -> (the error the volume methods give with open_edges="error", or None; slow)
 # The reasons come from ../shared/meshes/SOURCES.md's topology table.
@@ -39,7 +39,6 @@ EXPECTED: dict[str, tuple[tuple[type[Exception], list[str]] | None, bool]] = {
     # 481 non-manifold edges, 4712 boundary edges.
     "sponza.obj": (NOT_MANIFOLD, True),
 }
-VOLUME_METHODS = {"pvm", "pvmf"}
 
 
 def cases() -> list:

@@ -83,10 +83,17 @@ def test_finite_and_bounded_for_every_radius(renderer: penumbra.Renderer, radius
         assert np.isfinite(result.radiance).all() and 0 <= result.visibility.min() and result.visibility.max() <= 1
 
 
-def test_sphere_samples_beyond_one_shadow_map_frustum_are_a_clear_error(renderer: penumbra.Renderer) -> None:
+def test_sphere_samples_beyond_one_shadow_map_frustum_take_cube_faces(renderer: penumbra.Renderer) -> None:
+    """Samples on the sphere's side see the scene beyond one frustum's 80
+    degrees: with the default projection they take cube faces (the centre's
+    frustum still covers it); with projection="frustum" it is a clear error."""
     scene = penumbra.scenes.get("overlapping_casters", width=32, height=32, light_radius=1.0)
+    result = renderer.render(scene, "reference", n_samples=9, map_size=256)
+    assert 0 < result.stats["cube_maps"] < result.stats["light_samples"], result.stats
+    assert result.stats["shadow_map_faces"] < 6 * result.stats["cube_maps"] + result.stats["light_samples"], "faces that see nothing are skipped"
+    assert np.isfinite(result.visibility).all()
     with pytest.raises(penumbra.SceneError, match="80 degrees"):
-        renderer.render(scene, "reference", n_samples=9, map_size=256)
+        renderer.render(scene, "reference", n_samples=9, map_size=256, projection="frustum")
 
 
 @pytest.mark.parametrize("params, words", [({"n_samples": 0}, "n_samples"), ({"n_samples": 5000}, "n_samples"), ({"seed": -1}, "seed"), ({"n_samples": 2.5}, "integer"), ({"sampling": "square"}, "sampling")])

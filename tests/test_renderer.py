@@ -91,7 +91,7 @@ def test_intermediates_and_params_are_reported(renderer: penumbra.Renderer) -> N
     assert full.images["shadow_map"].shape == (256, 256)
     depth = full.images["shadow_map"]
     assert np.isfinite(depth).all() and depth.min() > 0
-    assert full.params == {"map_size": 256, "bias": "slope", "normal_offset": 1.0, "constant_bias": 0.5, "slope_bias": 1.0}
+    assert full.params == {"map_size": 256, "projection": "auto", "bias": "slope", "normal_offset": 1.0, "constant_bias": 0.5, "slope_bias": 1.0}
     assert full.method == "hard"
     np.testing.assert_array_equal(plain.radiance, full.radiance)
 

@@ -4,8 +4,14 @@
 Every function here raises the classes of :mod:`penumbra.errors`:
 ``MeshError``, ``LightError``, ``CameraError``, ``SceneError`` and
 ``ParameterError`` (all ``InvalidInputError``, hence ``ValueError``) for bad
-input; ``GpuUnavailableError`` when no adapter exists; ``GpuError`` when the
-GPU fails; ``PenumbraIOError`` when a file cannot be written.
+input, conversion errors included (never a bare ``TypeError``);
+``GpuUnavailableError`` when no adapter exists; ``GpuError`` when the GPU
+fails; ``PenumbraIOError`` when a file cannot be written; ``InternalError``
+for a broken invariant of the core (a bug).
+
+Scenes and cameras cross as the typed values of :mod:`penumbra.scene`
+(``CoreScene``, ``CoreMesh``, ``CoreLight``, ``CoreCamera``), read by
+attribute name.
 """
 
 from os import PathLike
@@ -17,15 +23,18 @@ import numpy.typing as npt
 from penumbra.errors import CameraError as CameraError
 from penumbra.errors import GpuError as GpuError
 from penumbra.errors import GpuUnavailableError as GpuUnavailableError
+from penumbra.errors import InternalError as InternalError
 from penumbra.errors import LightError as LightError
 from penumbra.errors import MeshError as MeshError
 from penumbra.errors import ParameterError as ParameterError
 from penumbra.errors import PenumbraIOError as PenumbraIOError
 from penumbra.errors import SceneError as SceneError
+from penumbra.scene import CoreCamera, CoreScene
 
 __all__ = [
     "adapter_info",
     "methods",
+    "method_specs",
     "write_image",
     "Renderer",
     "__version__",
@@ -37,42 +46,33 @@ __all__ = [
     "GpuUnavailableError",
     "GpuError",
     "PenumbraIOError",
+    "InternalError",
 ]
 
 __version__: str
 
 def adapter_info() -> dict[str, Any]: ...
 def methods() -> list[tuple[str, bool]]: ...
+def method_specs() -> list[dict[str, Any]]: ...
 def write_image(path: str | PathLike[str], image: npt.NDArray[np.float32]) -> None: ...
 @final
 class Renderer:
-    def __new__(cls, timing: str = "auto", pass_cache: bool = True) -> Renderer: ...
+    # timing: "auto" (None) or "cpu"; pass_cache: a bool (None: True).
+    def __new__(cls, timing: str | None = None, pass_cache: bool | None = None) -> Renderer: ...
     def adapter_info(self) -> dict[str, Any]: ...
     @property
     def pass_cache(self) -> bool: ...
     def pass_cache_entries(self) -> dict[str, int]: ...
     def clear_pass_cache(self) -> None: ...
+    def pool_stats(self) -> dict[str, int]: ...
+    def clear_pool(self) -> None: ...
     @property
     def timing_source(self) -> str: ...
     def render(
         self,
-        meshes: list[
-            tuple[
-                str,
-                npt.NDArray[np.float32],
-                npt.NDArray[np.uint32],
-                npt.NDArray[np.float32] | None,
-                npt.NDArray[np.float32],
-                int,
-                npt.NDArray[np.float32],
-            ]
-        ],
-        light: tuple[npt.NDArray[np.float32], float, npt.NDArray[np.float32]],
-        camera: tuple[
-            npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32], float, int, int
-        ],
-        ambient: npt.NDArray[np.float32],
+        scene: CoreScene,
+        camera: CoreCamera,
         method: str,
         params: dict[str, Any],
-        intermediates: bool = False,
+        intermediates: bool | None = None,
     ) -> dict[str, Any]: ...

@@ -19,6 +19,7 @@ __all__ = [
     "GpuError",
     "PenumbraIOError",
     "GroundTruthError",
+    "InternalError",
 ]
 
 
@@ -68,3 +69,9 @@ class PenumbraIOError(PenumbraError, OSError):
 class GroundTruthError(PenumbraError, RuntimeError):
     """Mitsuba ground truth cannot be rendered (Mitsuba missing, no usable
     variant for the requested images, or the export refused)."""
+
+
+class InternalError(PenumbraError, RuntimeError):
+    """Penumbra broke one of its own invariants (for example, an image whose
+    shape does not match its pixels): a bug to report, not a problem of the
+    input or the GPU."""

@@ -38,7 +38,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from penumbra.errors import GroundTruthError
-from penumbra.scene import Camera, Scene
+from penumbra.scene import Camera, Scene, world_geometry
 
 __all__ = ["GroundTruth", "ground_truth", "variant", "export", "default_cache_dir"]
 
@@ -103,17 +103,13 @@ def default_cache_dir() -> Path:
     return Path(root) / "groundtruth"
 
 
-def _world_vertices(mesh: Any) -> np.ndarray:
-    t = mesh.transform.astype(np.float64)
-    return (mesh.vertices.astype(np.float64) @ t[:3, :3].T + t[:3, 3]).astype(np.float32)
-
-
-def _world_normals(mesh: Any) -> np.ndarray | None:
-    if mesh.normals is None:
-        return None
-    t = mesh.transform.astype(np.float64)
-    n = mesh.normals.astype(np.float64) @ np.linalg.inv(t[:3, :3])
-    return (n / np.linalg.norm(n, axis=1, keepdims=True)).astype(np.float32)
+def _exported(mesh: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """A mesh's world-space vertices (float32), faces (uint32, counter-clockwise
+    from the front: reversed where the transform mirrors, as the core does)
+    and unit vertex normals (float32) or None, as Mitsuba gets them."""
+    world = world_geometry(mesh)
+    normals = None if world.normals is None else world.normals.astype(np.float32)
+    return world.vertices.astype(np.float32), world.faces.astype(np.uint32), normals
 
 
 def _camera_of(scene: Scene, camera: Camera | None) -> Camera:
@@ -130,7 +126,8 @@ def _scene_key(scene: Scene, camera: Camera) -> hashlib._Hash:
     h.update(json.dumps({"format": _FORMAT, "camera": [list(camera.eye), list(camera.target), list(camera.up), camera.fov_y, camera.width, camera.height],
                          "light": [scene.light.center.tolist(), scene.light.radius, scene.light.intensity.tolist()]}).encode())
     for mesh in scene.meshes:
-        for array in (_world_vertices(mesh), mesh.faces, mesh.albedo, _world_normals(mesh)):
+        vertices, faces, normals = _exported(mesh)
+        for array in (vertices, faces, mesh.albedo, normals):
             h.update(b"-" if array is None else np.ascontiguousarray(array).tobytes())
     return h
 
@@ -139,11 +136,11 @@ def _mesh(mi: Any, mesh: Any, index: int, with_bsdf: bool) -> Any:
     props = mi.Properties()
     if with_bsdf:
         props["bsdf"] = mi.load_dict({"type": "diffuse", "reflectance": {"type": "rgb", "value": mesh.albedo.astype(float).tolist()}})
-    normals = _world_normals(mesh)
-    m = mi.Mesh(f"mesh_{index}_{mesh.name}", len(mesh.vertices), len(mesh.faces), props=props, has_vertex_normals=normals is not None)
+    vertices, faces, normals = _exported(mesh)
+    m = mi.Mesh(f"mesh_{index}_{mesh.name}", len(vertices), len(faces), props=props, has_vertex_normals=normals is not None)
     params = mi.traverse(m)
-    params["vertex_positions"] = type(params["vertex_positions"])(_world_vertices(mesh).ravel())
-    params["faces"] = type(params["faces"])(mesh.faces.ravel())
+    params["vertex_positions"] = type(params["vertex_positions"])(vertices.ravel())
+    params["faces"] = type(params["faces"])(faces.ravel())
     if normals is not None:
         params["vertex_normals"] = type(params["vertex_normals"])(normals.ravel())
     params.update()
@@ -151,7 +148,7 @@ def _mesh(mi: Any, mesh: Any, index: int, with_bsdf: bool) -> Any:
 
 
 def _sensor(mi: Any, scene: Scene, camera: Camera, spp: int, seed: int) -> dict[str, Any]:
-    vertices = np.concatenate([_world_vertices(m) for m in scene.meshes])
+    vertices = np.concatenate([_exported(m)[0] for m in scene.meshes])
     distances = np.linalg.norm(vertices - np.asarray(camera.eye), axis=1)
     return {
         "type": "perspective",
@@ -179,7 +176,7 @@ def _light_as_point(scene: Scene) -> bool:
     radius = float(scene.light.radius)
     if radius == 0:
         return True
-    nearest = min(float(np.linalg.norm(_world_vertices(m) - scene.light.center, axis=1).min()) for m in scene.meshes)
+    nearest = min(float(np.linalg.norm(_exported(m)[0] - scene.light.center, axis=1).min()) for m in scene.meshes)
     return radius < POINT_LIGHT_RATIO * nearest
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from penumbra.scene import Scene
+from penumbra.scene import Scene, world_geometry
 
 __all__ = ["world_triangles", "point_light_visibility", "outline_band"]
 
@@ -17,10 +17,8 @@ __all__ = ["world_triangles", "point_light_visibility", "outline_band"]
 def _world_meshes(scene: Scene) -> list[np.ndarray]:
     parts = []
     for mesh in scene.meshes:
-        v = mesh.vertices.astype(np.float64)
-        t = mesh.transform.astype(np.float64)
-        world = v @ t[:3, :3].T + t[:3, 3]
-        parts.append(world[mesh.faces.astype(np.int64)])
+        world = world_geometry(mesh)
+        parts.append(world.vertices[world.faces])
     return parts
 
 

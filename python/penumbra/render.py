@@ -9,10 +9,13 @@ from typing import Any
 import numpy as np
 
 from penumbra import _core
-from penumbra.errors import CameraError, ParameterError, SceneError
+from penumbra.errors import CameraError, ParameterError, PenumbraIOError, SceneError
 from penumbra.scene import Camera, Scene
 
-__all__ = ["Renderer", "RenderResult", "adapter_info", "write_image", "methods"]
+__all__ = ["Renderer", "RenderResult", "adapter_info", "write_image", "methods", "method_info", "MethodInfo", "Param", "IMAGES"]
+
+#: The images every render returns, whatever the method (intermediates add more).
+IMAGES = ("radiance", "visibility", "depth", "normal", "position", "object_id")
 
 
 def adapter_info() -> dict[str, Any]:
@@ -28,15 +31,119 @@ def methods(implemented_only: bool = True) -> list[str]:
     return [name for name, done in _core.methods() if done or not implemented_only]
 
 
-def write_image(path: str | os.PathLike[str], image: np.ndarray) -> None:
+@dataclass(frozen=True)
+class Param:
+    """One parameter of a method, as the method declares it in the core: its
+    name, ``type`` (``"bool"``, ``"int"``, ``"float"`` or ``"choice"``),
+    default, accepted values (``minimum``/``maximum`` or ``choices``) and
+    a line of documentation."""
+
+    name: str
+    type: str
+    default: Any
+    doc: str
+    range: str
+    minimum: float | None = None
+    maximum: float | None = None
+    minimum_exclusive: bool = False
+    choices: tuple[str, ...] | None = None
+
+
+@dataclass(frozen=True)
+class MethodInfo:
+    """An implemented method: its name, the paper it implements and its parameters."""
+
+    name: str
+    paper: str
+    params: tuple[Param, ...]
+
+    def param(self, name: str) -> Param:
+        for p in self.params:
+            if p.name == name:
+                return p
+        raise ParameterError(f"method {self.name!r} has no parameter {name!r}; it takes {[p.name for p in self.params]}")
+
+    def defaults(self) -> dict[str, Any]:
+        """Every parameter's default, by name."""
+        return {p.name: p.default for p in self.params}
+
+
+def _method_infos() -> dict[str, MethodInfo]:
+    out = {}
+    for m in _core.method_specs():
+        params = tuple(
+            Param(**{**p, "choices": tuple(p["choices"]) if "choices" in p else None}) for p in m["params"]
+        )
+        out[m["name"]] = MethodInfo(name=m["name"], paper=m["paper"], params=params)
+    return out
+
+
+def method_info(method: str | None = None) -> Any:
+    """The declaration of ``method`` (a :class:`MethodInfo`), or of every
+    implemented method as a dict by name when ``method`` is None. This is
+    what the core checks parameters against: names, types, ranges, defaults."""
+    infos = _method_infos()
+    if method is None:
+        return infos
+    if method not in infos:
+        raise ParameterError(f"unknown or unimplemented method {method!r}; available: {sorted(infos)}")
+    return infos[method]
+
+
+def _check_wide_integers(method: str, params: dict[str, Any]) -> None:
+    """An integer beyond int64 cannot reach the core (its parameters are
+    64-bit): refused here with the declared range, as the core words it,
+    rather than converted to a float or described as one."""
+    for name, value in params.items():
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+            continue
+        if -(2**63) <= int(value) < 2**63:
+            continue
+        try:
+            accepted = method_info(method).param(name).range
+        except ParameterError:
+            continue  # an unknown method or parameter: the core names it
+        raise ParameterError(f"parameter '{name}' of method '{method}' must be {accepted}, got int {int(value)}")
+
+
+def parameter_table(method: str) -> str:
+    """A Markdown table of ``method``'s parameters (name, default, accepted values, meaning)."""
+    rows = ["| parameter | default | values | meaning |", "|---|---|---|---|"]
+    for p in method_info(method).params:
+        default = repr(p.default) if p.type == "choice" else str(p.default).lower() if p.type == "bool" else str(p.default)
+        values = p.range.replace("|", "\\|")
+        rows.append(f"| `{p.name}` | `{default}` | {values} | {p.doc} |")
+    return "\n".join(rows)
+
+
+def write_image(path: str | bytes | os.PathLike[str] | os.PathLike[bytes], image: np.ndarray) -> None:
     """Writes a linear float image (H, W) or (H, W, 3) by extension: ``.png``
-    sRGB-encoded 8-bit, ``.exr`` linear float, ``.npy`` the array as is."""
-    path = os.fspath(path)
-    array = np.asarray(image)
+    sRGB-encoded 8-bit, ``.exr`` linear float, ``.npy`` the array as is.
+
+    Raises :class:`~penumbra.errors.ParameterError` for a path that is not a
+    path, a non-numeric image, a wrong shape or extension, and NaN or
+    infinity in a PNG or EXR; :class:`~penumbra.errors.PenumbraIOError` when
+    the file cannot be written."""
+    try:
+        path = os.fsdecode(path)
+    except TypeError:
+        raise ParameterError(f"path must be a str or os.PathLike, got {type(path).__name__}") from None
+    try:
+        array = np.asarray(image)
+    except (TypeError, ValueError) as e:
+        raise ParameterError(f"image must be a numeric array: {e}") from None
+    if array.dtype.kind not in "biuf":
+        raise ParameterError(f"image must be a numeric array, got dtype {array.dtype}")
     if path.lower().endswith(".npy"):
-        np.save(path, array)
+        try:
+            np.save(path, array)
+        except OSError as e:
+            raise PenumbraIOError(f"writing {path}: {e.strerror or e}") from None
         return
-    _core.write_image(path, np.ascontiguousarray(array, dtype=np.float32))
+    with np.errstate(over="ignore"):
+        # Beyond float32's range becomes inf, which the core then refuses.
+        data = np.ascontiguousarray(array, dtype=np.float32)
+    _core.write_image(path, data)
 
 
 @dataclass
@@ -117,13 +224,16 @@ class Renderer:
     with and without it. A reused pass does not appear in ``timings`` (it did
     not run); ``stats["reused_passes"]`` counts them and
     ``stats["reused_<pass>"]`` is 1 or 0 for each cacheable pass of the
-    method. A few entries per pass kind are kept (see the README's "Sweeps").
+    method. A few entries per pass kind are kept (see docs/sweeps.md).
     ``pass_cache=False`` runs every pass of every render from scratch: use it
     to time repeated renders.
     """
 
     def __init__(self, timing: str = "auto", pass_cache: bool = True) -> None:
-        self._core = _core.Renderer(timing, bool(pass_cache))
+        if not isinstance(timing, str):
+            raise ParameterError(f"timing must be 'auto' or 'cpu', got {timing!r}")
+        # The core parses the mode and refuses a pass_cache that is not a bool.
+        self._core = _core.Renderer(timing, pass_cache)
 
     @property
     def pass_cache(self) -> bool:
@@ -134,8 +244,20 @@ class Renderer:
         """Entries the pass cache holds, per pass kind."""
         return self._core.pass_cache_entries()
 
+    def pool_stats(self) -> dict[str, int]:
+        """What the renderer's pool of GPU resources (textures, buffers and
+        bind groups reused across renders) holds: counts, and bytes in use
+        (by a render or the pass cache) and free."""
+        return self._core.pool_stats()
+
+    def clear_pool(self) -> None:
+        """Releases every pooled GPU resource not in use (free ones beyond
+        256 MiB are released after each render anyway)."""
+        self._core.clear_pool()
+
     def clear_pass_cache(self) -> None:
-        """Drops every cached pass output (and the GPU memory it holds)."""
+        """Drops every cached pass output and releases the pooled GPU memory
+        that no render holds."""
         self._core.clear_pass_cache()
 
     @property
@@ -162,7 +284,7 @@ class Renderer:
         returns the method's intermediate images (e.g. ``shadow_map``)."""
         if not isinstance(scene, Scene):
             raise SceneError(f"expected a penumbra.Scene, got {type(scene).__name__}")
-        scene.check()
+        core_scene = scene._core_value()
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {method!r}")
         camera = camera or scene.camera
@@ -170,13 +292,7 @@ class Renderer:
             raise CameraError("the scene has no camera; pass camera=penumbra.Camera(...)")
         if not isinstance(camera, Camera):
             raise CameraError(f"camera must be a penumbra.Camera, got {type(camera).__name__}")
-        out = self._core.render(
-            [m._core_args(i) for i, m in enumerate(scene.meshes)],
-            scene.light._core_args(),
-            camera._core_args(),
-            np.asarray(scene.ambient, dtype=np.float32),
-            method,
-            params,
-            bool(intermediates),
-        )
+        _check_wide_integers(method, params)
+        # intermediates goes as is: the core refuses anything but a bool.
+        out = self._core.render(core_scene, camera._core_value(), method, params, intermediates)
         return RenderResult(**out)

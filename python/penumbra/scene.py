@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any, NamedTuple, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -21,9 +21,12 @@ from penumbra.errors import CameraError, LightError, MeshError, SceneError
 if TYPE_CHECKING:
     import trimesh
 
-__all__ = ["Mesh", "SphereLight", "Camera", "Scene"]
+__all__ = ["Mesh", "SphereLight", "Camera", "Scene", "WorldGeometry", "world_geometry"]
 
 ArrayLike = npt.ArrayLike
+
+#: Object ids are int32 in the object-id image, where -1 marks the background.
+MAX_OBJECT_ID = 2**31 - 1
 
 
 def _float_array(value: ArrayLike, shape: tuple[int | None, ...], what: str, error: type[Exception]) -> np.ndarray:
@@ -66,6 +69,24 @@ def _size(value: Any, what: str) -> int:
     return int(value)
 
 
+def _name(value: Any) -> str:
+    """A mesh name as text the core (UTF-8) can carry."""
+    name = str(value)
+    try:
+        name.encode("utf-8")
+    except UnicodeEncodeError as e:
+        raise MeshError(f"mesh name {name!r} is not valid Unicode text ({e.reason} at position {e.start})") from None
+    return name
+
+
+def _object_id(value: Any, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise MeshError(f"mesh '{name}': object_id must be an integer, got {value!r}")
+    if not 0 <= int(value) <= MAX_OBJECT_ID:
+        raise MeshError(f"mesh '{name}': object_id must be >= 0 (-1 marks the background) and at most {MAX_OBJECT_ID} (int32), got {int(value)}")
+    return int(value)
+
+
 class Mesh:
     """A triangle mesh with a diffuse albedo and an object id.
 
@@ -87,14 +108,12 @@ class Mesh:
         normals: ArrayLike | None = None,
         name: str = "mesh",
     ) -> None:
-        self.name = str(name)
+        self.name = name = _name(name)
         self.vertices = _float_array(vertices, (None, 3), f"mesh '{name}': vertices", MeshError)
         self.faces = self._faces(faces)
         self.normals = None if normals is None else _float_array(normals, (None, 3), f"mesh '{name}': normals", MeshError)
         self.albedo = _rgb(albedo, f"mesh '{name}': albedo", MeshError)
-        if object_id is not None and (isinstance(object_id, bool) or not isinstance(object_id, (int, np.integer))):
-            raise MeshError(f"mesh '{name}': object_id must be an integer, got {object_id!r}")
-        self.object_id = None if object_id is None else int(object_id)
+        self.object_id = None if object_id is None else _object_id(object_id, name)
         self.transform = (
             np.eye(4, dtype=np.float32)
             if transform is None
@@ -108,7 +127,8 @@ class Mesh:
             raise MeshError(f"mesh '{self.name}': faces must be integers: {e}") from None
         if array.size == 0:
             array = array.reshape(0, 3) if array.ndim <= 1 else array
-        if not np.issubdtype(array.dtype, np.integer):
+        # By kind, not np.integer: numpy counts timedelta64 as an integer type.
+        if array.dtype.kind not in "iu":
             raise MeshError(f"mesh '{self.name}': faces must be integers, got dtype {array.dtype}")
         if array.ndim != 2 or array.shape[1] != 3:
             raise MeshError(f"mesh '{self.name}': faces must have shape (M, 3), got {array.shape}")
@@ -135,20 +155,28 @@ class Mesh:
     def __repr__(self) -> str:
         return f"Mesh({self.name!r}, {len(self.vertices)} vertices, {len(self.faces)} faces)"
 
-    def _core_args(self, index: int) -> tuple:
+    def _core_value(self, index: int) -> "CoreMesh":
         # The attributes are public and may have been replaced since __init__
         # (a float64 or wrongly shaped array would otherwise reach the core as
         # an untyped TypeError): coerce and check them again. For arrays that
         # are already right this copies nothing.
-        name = str(self.name)
-        vertices = _float_array(self.vertices, (None, 3), f"mesh '{name}': vertices", MeshError)
-        normals = None if self.normals is None else _float_array(self.normals, (None, 3), f"mesh '{name}': normals", MeshError)
-        albedo = _rgb(self.albedo, f"mesh '{name}': albedo", MeshError)
-        transform = _float_array(self.transform, (4, 4), f"mesh '{name}': transform", MeshError)
-        object_id = index if self.object_id is None else self.object_id
-        if isinstance(object_id, bool) or not isinstance(object_id, (int, np.integer)):
-            raise MeshError(f"mesh '{name}': object_id must be an integer, got {object_id!r}")
-        return (name, vertices, self._faces(self.faces), normals, albedo, int(object_id), transform)
+        name = _name(self.name)
+        return CoreMesh(
+            name=name,
+            vertices=_float_array(self.vertices, (None, 3), f"mesh '{name}': vertices", MeshError),
+            faces=self._faces(self.faces),
+            normals=None if self.normals is None else _float_array(self.normals, (None, 3), f"mesh '{name}': normals", MeshError),
+            albedo=_rgb(self.albedo, f"mesh '{name}': albedo", MeshError),
+            object_id=_object_id(index if self.object_id is None else self.object_id, name),
+            transform=_float_array(self.transform, (4, 4), f"mesh '{name}': transform", MeshError),
+        )
+
+
+def _radius(value: Any) -> float:
+    radius = _real(value, "light radius", LightError)
+    if radius < 0 or not math.isfinite(radius):
+        raise LightError(f"light radius must be finite and >= 0, got {radius}")
+    return radius
 
 
 class SphereLight:
@@ -165,9 +193,7 @@ class SphereLight:
         intensity: ArrayLike | None = None,
     ) -> None:
         self.center = _float_array(center, (3,), "light center", LightError)
-        self.radius = _real(radius, "light radius", LightError)
-        if self.radius < 0 or not math.isfinite(self.radius):
-            raise LightError(f"light radius must be finite and >= 0, got {self.radius}")
+        self.radius = _radius(radius)
         if (radiance is None) == (intensity is None):
             raise LightError("give exactly one of radiance and intensity")
         if radiance is not None:
@@ -193,8 +219,13 @@ class SphereLight:
     def __repr__(self) -> str:
         return f"SphereLight(center={self.center.tolist()}, radius={self.radius}, intensity={self.intensity.tolist()})"
 
-    def _core_args(self) -> tuple:
-        return (self.center, np.float32(self.radius).item(), self.intensity)
+    def _core_value(self) -> "CoreLight":
+        # Checked again, as a mesh's attributes are: they are public.
+        return CoreLight(
+            center=_float_array(self.center, (3,), "light center", LightError),
+            radius=np.float32(_radius(self.radius)).item(),
+            intensity=_rgb(self.intensity, "light intensity", LightError),
+        )
 
 
 @dataclass(frozen=True)
@@ -218,6 +249,9 @@ class Camera:
         object.__setattr__(self, "fov_y", _real(self.fov_y, "camera fov_y", CameraError))
         object.__setattr__(self, "width", _size(self.width, "camera width"))
         object.__setattr__(self, "height", _size(self.height, "camera height"))
+        if self.width < 1 or self.height < 1:
+            # Here, not at render time: Camera.with_size(0, 0) is already wrong.
+            raise CameraError(f"camera: image size must be at least 1x1, got {self.width}x{self.height}")
 
     @classmethod
     def look_at(cls, eye: Sequence[float], target: Sequence[float], up: Sequence[float] = (0.0, 1.0, 0.0), **kwargs: Any) -> "Camera":
@@ -226,9 +260,9 @@ class Camera:
     def with_size(self, width: int, height: int) -> "Camera":
         return replace(self, width=width, height=height)
 
-    def _core_args(self) -> tuple:
+    def _core_value(self) -> "CoreCamera":
         f = lambda v: np.asarray(v, dtype=np.float32)  # noqa: E731
-        return (f(self.eye), f(self.target), f(self.up), np.float32(self.fov_y).item(), self.width, self.height)
+        return CoreCamera(f(self.eye), f(self.target), f(self.up), np.float32(self.fov_y).item(), self.width, self.height)
 
 
 @dataclass
@@ -251,6 +285,8 @@ class Scene:
         replaced after construction; the renderer calls this before each render)."""
         if isinstance(self.meshes, Mesh):
             self.meshes = [self.meshes]
+        if isinstance(self.meshes, (str, bytes)) or not isinstance(self.meshes, (list, tuple)):
+            raise SceneError(f"meshes must be a list of penumbra.Mesh, got {type(self.meshes).__name__}")
         self.meshes = list(self.meshes)
         for i, m in enumerate(self.meshes):
             if not isinstance(m, Mesh):
@@ -266,3 +302,82 @@ class Scene:
 
     def with_camera(self, camera: Camera) -> "Scene":
         return replace(self, camera=camera)
+
+    def _core_value(self) -> "CoreScene":
+        self.check()
+        return CoreScene(
+            meshes=[m._core_value(i) for i, m in enumerate(self.meshes)],
+            light=self.light._core_value(),
+            ambient=np.asarray(self.ambient, dtype=np.float32),
+        )
+
+
+# What crosses the binding: rust/penumbra-py reads these attributes by name
+# (its `CoreScene`, `CoreMesh`, `CoreLight` and `CoreCamera`), so no argument
+# order is written twice. The classes above build them, checked and coerced
+# to the exact dtypes, just before each render.
+
+
+@dataclass(frozen=True)
+class CoreMesh:
+    name: str
+    vertices: np.ndarray  # float32 (N, 3)
+    faces: np.ndarray  # uint32 (M, 3)
+    normals: np.ndarray | None  # float32 (N, 3)
+    albedo: np.ndarray  # float32 (3,)
+    object_id: int
+    transform: np.ndarray  # float32 (4, 4), row-major
+
+
+@dataclass(frozen=True)
+class CoreLight:
+    center: np.ndarray  # float32 (3,)
+    radius: float
+    intensity: np.ndarray  # float32 (3,)
+
+
+@dataclass(frozen=True)
+class CoreCamera:
+    eye: np.ndarray  # float32 (3,)
+    target: np.ndarray
+    up: np.ndarray
+    fov_y: float
+    width: int
+    height: int
+
+
+@dataclass(frozen=True)
+class CoreScene:
+    meshes: list[CoreMesh]
+    light: CoreLight
+    ambient: np.ndarray  # float32 (3,)
+
+
+class WorldGeometry(NamedTuple):
+    """A mesh in world space: float64 ``vertices`` (N, 3), int64 ``faces``
+    (M, 3) counter-clockwise from the front, and unit ``normals`` (N, 3) or None."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray | None
+
+
+def world_geometry(mesh: Mesh) -> WorldGeometry:
+    """``mesh`` in world space, as the core builds it (``Scene::prepare`` in
+    rust/penumbra-core/src/scene.rs): vertices through the transform, vertex
+    normals through its inverse transpose, and, where the transform mirrors
+    (negative determinant), faces with their winding reversed so that their
+    front side is the one the transform carries along. The one copy of this
+    in Python: the Mitsuba export, the ray caster and the transition
+    measurements use it."""
+    t = np.asarray(mesh.transform, dtype=np.float64)
+    linear = t[:3, :3]
+    vertices = np.asarray(mesh.vertices, dtype=np.float64) @ linear.T + t[:3, 3]
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    if np.linalg.det(linear) < 0:
+        faces = faces[:, [0, 2, 1]]
+    normals = None
+    if mesh.normals is not None:
+        n = np.asarray(mesh.normals, dtype=np.float64) @ np.linalg.inv(linear)
+        normals = n / np.linalg.norm(n, axis=1, keepdims=True)
+    return WorldGeometry(vertices, faces, normals)

@@ -5,7 +5,7 @@ Each is a caster (or several) over a 10 x 10 ground slab whose top is at
 y = 0 (closed, so the silhouette methods accept it), lit by a sphere light
 above, seen by a camera from the front and above:
 
-- ``sphere_on_plane``: a sphere floating over the plane (the default scene).
+- ``sphere_on_plane``: a smooth sphere floating over the plane (the default scene).
 - ``cube_on_plane``: a rotated cube floating over the plane.
 - ``overlapping_casters``: a sphere high up and a box lower down whose shadows
   overlap in light space (PVM's overlap artifact, Cournia 4.3).
@@ -16,6 +16,7 @@ above, seen by a camera from the front and above:
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Callable
 
 import numpy as np
@@ -24,7 +25,24 @@ import trimesh
 from penumbra.errors import MeshError, ParameterError
 from penumbra.scene import Camera, Mesh, Scene, SphereLight
 
-__all__ = ["names", "get", "DEFAULT", "SETUPS", "CLOSED_MESHES", "SUITE_SETUPS", "ground_plane", "ground_slab", "sphere", "box", "from_mesh", "real_mesh_suite"]
+__all__ = [
+    "names",
+    "get",
+    "DEFAULT",
+    "ground_plane",
+    "ground_slab",
+    "sphere",
+    "box",
+    "from_mesh",
+    "SETUPS",
+    "CLOSED_MESHES",
+    "SUITE_SETUPS",
+    "real_mesh_suite",
+    "load_mesh",
+    "wide_floor",
+    "cornell_box",
+    "sponza",
+]
 
 DEFAULT = "sphere_on_plane"
 _WIDTH, _HEIGHT = 512, 512
@@ -46,10 +64,24 @@ def ground_slab(half_size: float = 5.0, thickness: float = 0.2, albedo: float = 
     return Mesh(vertices, m.faces, albedo=albedo, object_id=object_id, name="ground")
 
 
-def sphere(center: tuple[float, float, float], radius: float, *, subdivisions: int = 4, albedo: float = 0.7, object_id: int = 1, name: str = "sphere") -> Mesh:
-    """An icosphere (counter-clockwise outward faces)."""
+def sphere(
+    center: tuple[float, float, float],
+    radius: float,
+    *,
+    subdivisions: int = 4,
+    smooth: bool = False,
+    albedo: float = 0.7,
+    object_id: int = 1,
+    name: str = "sphere",
+) -> Mesh:
+    """An icosphere (counter-clockwise outward faces). ``smooth=True`` gives
+    it the true sphere's normals at its vertices (the radial directions),
+    which Penumbra and the Mitsuba export both interpolate across each face;
+    the geometry, and so every shadow, stays the icosphere's."""
     m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
-    return Mesh(m.vertices + np.asarray(center), m.faces, albedo=albedo, object_id=object_id, name=name)
+    vertices = np.asarray(m.vertices, dtype=np.float64)
+    normals = vertices / np.linalg.norm(vertices, axis=1, keepdims=True) if smooth else None
+    return Mesh(vertices + np.asarray(center), m.faces, albedo=albedo, object_id=object_id, normals=normals, name=name)
 
 
 def box(center: tuple[float, float, float], extents: tuple[float, float, float], *, yaw_degrees: float = 0.0, albedo: float = 0.7, object_id: int = 1, name: str = "box") -> Mesh:
@@ -70,7 +102,16 @@ def _light(radius: float) -> SphereLight:
 
 
 def _sphere_on_plane() -> Scene:
-    return Scene([ground_slab(), sphere((0.0, 1.6, 0.0), 1.0)], _light(0.5), _camera(), name="sphere_on_plane")
+    # Smooth: vertex normals on five subdivisions (20480 faces). Flat faces
+    # look faceted and, smaller than a pixel, shade each pixel by the one face
+    # its centre hits where Mitsuba averages the pixel (0.85-1.2% radiance
+    # RMSE on the sphere); vertex normals on four subdivisions make shadow-map
+    # tests leak light at the terminator, where the normals are 1.5-2.9
+    # degrees off the faces (`reference` twice as far from the ground truth).
+    # Five subdivisions with vertex normals match Mitsuba to 0.1% in radiance
+    # and as flat faces do in visibility: benchmarks/sphere_tessellation.py.
+    ball = sphere((0.0, 1.6, 0.0), 1.0, subdivisions=5, smooth=True)
+    return Scene([ground_slab(), ball], _light(0.5), _camera(), name="sphere_on_plane")
 
 
 def _cube_on_plane() -> Scene:
@@ -104,7 +145,7 @@ def names() -> list[str]:
 
 def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = None, light_radius: float | None = None) -> Scene:
     """Builds the built-in scene ``name``, optionally at another image size or light radius."""
-    if name not in _SCENES:
+    if not isinstance(name, str) or name not in _SCENES:
         raise ParameterError(f"unknown scene {name!r}; built-in scenes: {names()}")
     scene = _SCENES[name]()
     assert scene.camera is not None
@@ -155,6 +196,44 @@ def _obj_with_relative_indices(path: str) -> trimesh.Trimesh | None:
     return trimesh.Trimesh(np.array(vertices, dtype=np.float64).reshape(-1, 3), np.array(faces, dtype=np.int64).reshape(-1, 3), process=False)
 
 
+def load_mesh(path: str) -> trimesh.Trimesh:
+    """The triangles of a mesh file (anything trimesh reads; OBJ files with
+    relative indices read here), as they are in the file."""
+    # trimesh merges vertices by casting their coordinates to integers: a
+    # coordinate beyond float32's range warns there ("invalid value in cast")
+    # and may collapse the mesh. The coordinates are checked, and named,
+    # before that warning reaches the caller.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            loaded = _obj_with_relative_indices(path) or trimesh.load(path, force="mesh")
+        except Exception as e:  # trimesh raises many types for unreadable files
+            raise MeshError(f"cannot read mesh file {path!r}: {e}") from None
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise MeshError(f"mesh file {path!r} holds no triangles")
+    raw = np.asarray(loaded.vertices, dtype=np.float64)
+    limit = float(np.finfo(np.float32).max)
+    bad = ~(np.abs(raw) <= limit).all(axis=1)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise MeshError(f"mesh file {path!r}: vertex {i} {raw[i].tolist()} has a coordinate that is NaN, infinite or beyond float32's range (+-{limit:.4g})")
+    for w in caught:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+    extent = float(np.max(loaded.extents))
+    if not math.isfinite(extent) or extent <= 0:
+        raise MeshError(f"mesh file {path!r} has a degenerate or non-finite bounding box")
+    return loaded
+
+
+def _resting(path: str, size: float) -> Mesh:
+    """The mesh of `path` scaled to a `size`-unit bounding box, centred on
+    the y axis and resting on y = 0."""
+    loaded = load_mesh(path)
+    vertices = (np.asarray(loaded.vertices) - loaded.bounds.mean(axis=0)) * (size / float(np.max(loaded.extents)))
+    vertices[:, 1] -= vertices[:, 1].min() - 1e-3
+    return Mesh(vertices, np.asarray(loaded.faces), albedo=0.7, object_id=1, name=str(path).rsplit("/", 1)[-1])
+
+
 # The ways from_mesh places a mesh, its light and camera (see from_mesh).
 SETUPS = ("default", "close", "wide_floor")
 
@@ -171,34 +250,21 @@ def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_ra
       the light 3 units above the floor, seen from above the floor's front:
       a floor wider than the light is high. The light stands over the
       floor's middle, so every floor corner lies within 60 degrees of the
-      shadow map's axis (one frustum covers at most 80 degrees today).
+      shadow map's axis and one frustum covers it (``wide_floor`` below
+      needs cube faces).
     """
     if setup not in SETUPS:
         raise ParameterError(f"unknown setup {setup!r}; choose one of {list(SETUPS)}")
-    try:
-        loaded = _obj_with_relative_indices(path) or trimesh.load(path, force="mesh")
-    except Exception as e:  # trimesh raises many types for unreadable files
-        raise MeshError(f"cannot read mesh file {path!r}: {e}") from None
-    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise MeshError(f"mesh file {path!r} holds no triangles")
-    extent = float(np.max(loaded.extents))
-    if not math.isfinite(extent) or extent <= 0:
-        raise MeshError(f"mesh file {path!r} has a degenerate or non-finite bounding box")
-    size = 1.5 if setup == "wide_floor" else 2.5
-    scale = size / extent
-    vertices = (np.asarray(loaded.vertices) - loaded.bounds.mean(axis=0)) * scale
-    vertices[:, 1] -= vertices[:, 1].min() - 1e-3
-    name = str(path).rsplit("/", 1)[-1]
-    mesh = Mesh(vertices, np.asarray(loaded.faces), albedo=0.7, object_id=1, name=name)
+    mesh = _resting(path, 1.5 if setup == "wide_floor" else 2.5)
     if setup == "wide_floor":
         light = SphereLight(center=(0.4, 3.0, 0.3), radius=light_radius, intensity=20.0)
         camera = Camera(eye=(0.0, 4.0, 4.4), target=(-0.2, 0.0, -0.2), fov_y=55.0, width=width, height=height)
-        return Scene([ground_slab(half_size=3.0), mesh], light, camera, name=name)
+        return Scene([ground_slab(half_size=3.0), mesh], light, camera, name=mesh.name)
     if setup == "close":
         camera = Camera(eye=(1.2, 6.5, 5.0), target=(-0.7, 0.4, -0.6), fov_y=50.0, width=width, height=height)
     else:
         camera = _camera().with_size(width, height)
-    return Scene([ground_slab(), mesh], _light(light_radius), camera, name=name)
+    return Scene([ground_slab(), mesh], _light(light_radius), camera, name=mesh.name)
 
 
 # The closed 2-manifold meshes of ../shared/meshes (its SOURCES.md), which the
@@ -218,3 +284,38 @@ def real_mesh_suite(folder: str, *, width: int = 160, height: int = 160, meshes:
             scene = from_mesh(f"{folder}/{mesh}", width=width, height=height, light_radius=radius, setup=setup)
             out[f"{mesh} {setup} r={radius}"] = scene
     return out
+
+
+def wide_floor(path: str | None = None, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.3) -> Scene:
+    """A floor eight times wider than the light is high: a 12 x 12 slab under
+    a light 1.5 above it, with a caster between them (the mesh file at
+    ``path`` scaled to a 1-unit box, or a box). One shadow-map frustum would
+    span 80 degrees to the floor's corners: shadow maps take cube faces
+    (``projection="auto"``)."""
+    caster = _resting(path, 1.0) if path is not None else box((0.0, 0.4, 0.0), (0.6, 0.8, 0.6), yaw_degrees=30.0)
+    camera = Camera(eye=(0.0, 3.0, 7.0), target=(0.0, 0.3, 0.0), fov_y=50.0, width=width, height=height)
+    light = SphereLight(center=(0.4, 1.5, 0.3), radius=light_radius, intensity=12.0)
+    return Scene([ground_slab(half_size=6.0), caster], light, camera, name="wide_floor" + (f" ({caster.name})" if path else ""))
+
+
+def cornell_box(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.15) -> Scene:
+    """The Cornell box of ``path`` (``CornellBox-Original.obj``: a 2-unit
+    room, open at the front, with two blocks) lit by a sphere light under its
+    ceiling, seen through the open front. The light is surrounded by
+    geometry: shadow maps take cube faces (``projection="auto"``)."""
+    loaded = load_mesh(path)
+    room = Mesh(np.asarray(loaded.vertices), np.asarray(loaded.faces), albedo=0.7, object_id=1, name="cornell_box")
+    camera = Camera(eye=(0.0, 1.0, 3.4), target=(0.0, 1.0, 0.0), fov_y=40.0, width=width, height=height)
+    light = SphereLight(center=(0.0, 1.65, -0.1), radius=light_radius, intensity=3.0)
+    return Scene([room], light, camera, name="cornell_box")
+
+
+def sponza(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5) -> Scene:
+    """Crytek's Sponza atrium (``sponza.obj``, 66k triangles) lit by a sphere
+    light hanging in the atrium, seen from inside the building (the camera
+    is inside the geometry's bounds). Shadow maps take cube faces."""
+    loaded = load_mesh(path)
+    hall = Mesh(np.asarray(loaded.vertices), np.asarray(loaded.faces), albedo=0.7, object_id=1, name="sponza")
+    camera = Camera(eye=(-10.0, 2.5, 0.5), target=(4.0, 4.0, 0.0), fov_y=60.0, width=width, height=height)
+    light = SphereLight(center=(0.0, 7.0, 0.0), radius=light_radius, intensity=150.0)
+    return Scene([hall], light, camera, name="sponza")

@@ -22,14 +22,15 @@ import itertools
 import math
 import os
 import sys
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 
 from penumbra.errors import ParameterError, SceneError
-from penumbra.render import Renderer, RenderResult
+from penumbra.grid import ParamGrid, expand, result_columns
+from penumbra.render import IMAGES, Renderer, RenderResult
 from penumbra.scene import Camera, Scene
 
 if TYPE_CHECKING:
@@ -42,30 +43,30 @@ __all__ = ["sweep", "grid"]
 #: Images kept per configuration with ``keep_images=True``.
 DEFAULT_IMAGES = ("radiance", "visibility")
 
-ParamGrid = Union[Mapping[str, Sequence[Any]], Sequence[Mapping[str, Any]], None]
 Scenes = Union[Scene, Mapping[str, Scene], Sequence[Scene]]
 
 
 def grid(params: ParamGrid) -> list[dict[str, Any]]:
-    """The parameter sets of ``params``: a dict of lists is their Cartesian
-    product, the last key varying fastest; a list of dicts is taken as is;
-    ``None`` is one set of defaults."""
-    if params is None:
-        return [{}]
-    if isinstance(params, Mapping):
-        keys = list(params)
-        values = []
-        for k in keys:
-            v = params[k]
-            if isinstance(v, (str, bytes)) or not isinstance(v, Iterable):
-                raise ParameterError(f"grid values of {k!r} must be a list of values, got {v!r}")
-            values.append(list(v))
-        return [dict(zip(keys, combo)) for combo in itertools.product(*values)]
-    sets = [dict(p) for p in params]
-    for p in sets:
-        if not all(isinstance(k, str) for k in p):
-            raise ParameterError(f"parameter names must be strings, got {list(p)}")
-    return sets
+    """The parameter sets of ``params`` (:func:`penumbra.grid.expand`, the
+    expander ``penumbra bench`` uses too): a dict's Cartesian product, the
+    last key varying fastest (a list value varies, any other value is
+    fixed); a list of dicts, each expanded in turn; ``None``, one set of
+    defaults. Repeated sets are kept: one row each."""
+    return expand(params)
+
+
+def _kept_images(keep_images: Any) -> tuple[str, ...]:
+    if keep_images is True:
+        return DEFAULT_IMAGES
+    if keep_images is False or keep_images is None:
+        return ()
+    names = [keep_images] if isinstance(keep_images, str) else keep_images
+    if not isinstance(names, (list, tuple)) or not all(isinstance(n, str) for n in names):
+        raise ParameterError(f"keep_images must be True, False or a list of image names, got {keep_images!r}")
+    unknown = [n for n in names if n not in IMAGES]
+    if unknown:
+        raise ParameterError(f"keep_images: no image named {unknown}; a sweep's renders have {list(IMAGES)}")
+    return tuple(names)
 
 
 def _scenes(scenes: Scenes) -> dict[str, Scene]:
@@ -73,8 +74,10 @@ def _scenes(scenes: Scenes) -> dict[str, Scene]:
         return {"scene": scenes}
     if isinstance(scenes, Mapping):
         named = {str(k): v for k, v in scenes.items()}
-    else:
+    elif isinstance(scenes, Sequence) and not isinstance(scenes, (str, bytes)):
         named = {f"scene{i}": s for i, s in enumerate(scenes)}
+    else:
+        raise SceneError(f"scenes must be a penumbra.Scene, a dict or a list of them, got {type(scenes).__name__}")
     if not named:
         raise SceneError("a sweep needs at least one scene")
     for name, s in named.items():
@@ -123,13 +126,7 @@ def _row(task: _Task, result: RenderResult, chunk: _Chunk) -> tuple[dict[str, An
 
     row: dict[str, Any] = {"config": task.index, "scene": task.scene_name, "method": task.method}
     row.update({k: result.params.get(k, task.params.get(k)) for k in chunk.columns})
-    row["total_ms"] = result.total_ms
-    row["timing_source"] = result.timing_source
-    for name, ms in result.timings.items():
-        row[f"time_{name}"] = ms
-    for name, value in result.stats.items():
-        row[f"stat_{name}"] = value
-    row["reused"] = ",".join(result.reused_passes)
+    row.update(result_columns(result))
     row["worker_pid"] = os.getpid()
     gt = chunk.ground_truth.get(task.scene_name)
     if gt is not None:
@@ -211,13 +208,16 @@ def sweep(
 
     Columns: ``config`` (the index in run order), ``scene``, ``method``, each
     parameter the grid names (the value in effect: a method's default where a
-    set leaves it out), ``total_ms``, ``timing_source``, ``time_<pass>`` (ms,
-    only for passes that ran: a pass the renderer's cache reused has none,
-    NaN in its column), ``stat_<name>`` for each stat (``stat_reused_passes``
-    and ``stat_reused_<pass>`` say what was reused), ``reused`` (the reused
-    passes' names, comma-separated), ``worker_pid``, and the metrics.
-    ``keep_images=True`` adds an ``images`` column of dicts holding
-    radiance and visibility; a list of image names keeps those instead.
+    set leaves it out), then the row schema ``penumbra bench`` shares
+    (:func:`penumbra.grid.result_columns`): ``total_ms``, ``timing_source``,
+    ``ms_<pass>`` (ms, only for passes that ran: a pass the renderer's cache
+    reused has none, NaN in its column), ``stat_<name>`` for each stat
+    (``stat_reused_passes`` and ``stat_reused_<pass>`` say what was reused),
+    ``reused`` (the reused passes' names, comma-separated); then
+    ``worker_pid`` and the metrics. ``keep_images=True`` adds an ``images``
+    column of dicts holding radiance and visibility; a list of image names
+    (of ``radiance``, ``visibility``, ``depth``, ``normal``, ``position``,
+    ``object_id``) keeps those instead.
 
     ``renderer``: the renderer for in-process sweeps (default: one per
     process, kept between sweeps, so repeated sweeps reuse its cache).
@@ -237,12 +237,7 @@ def sweep(
     if not methods or not all(isinstance(m, str) for m in methods):
         raise ParameterError(f"method must be a name or a list of names, got {method!r}")
     sets = grid(params)
-    if keep_images is True:
-        kept: tuple[str, ...] = DEFAULT_IMAGES
-    elif keep_images is False:
-        kept = ()
-    else:
-        kept = tuple(keep_images)
+    kept = _kept_images(keep_images)
     columns = tuple(dict.fromkeys(k for p in sets for k in p))
     truths = _ground_truths(ground_truth, named, camera, ground_truth_spp)
     tasks = [

@@ -19,7 +19,7 @@ from typing import Sequence
 
 import numpy as np
 
-from penumbra.scene import Scene
+from penumbra.scene import Scene, world_geometry
 
 __all__ = ["standing_edges", "transition_width"]
 
@@ -28,8 +28,7 @@ def standing_edges(scene: Scene, mesh: int) -> tuple[np.ndarray, list[np.ndarray
     """The light's foot (x, z) and the ground corners (x, z) of the two
     vertical silhouette edges of a box-like caster ``scene.meshes[mesh]``
     standing on y = 0: the base corners seen from the foot at the extreme angles."""
-    m = scene.meshes[mesh]
-    vertices = np.c_[np.asarray(m.vertices, dtype=np.float64), np.ones(len(m.vertices))] @ np.asarray(m.transform, dtype=np.float64).T
+    vertices = world_geometry(scene.meshes[mesh]).vertices
     base = vertices[np.abs(vertices[:, 1]) < 1e-4][:, [0, 2]]
     foot = np.asarray(scene.light.center, dtype=np.float64)[[0, 2]]
     angle = np.arctan2(base[:, 1] - foot[1], base[:, 0] - foot[0])

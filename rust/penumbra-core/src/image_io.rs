@@ -30,30 +30,41 @@ pub fn write_image(path: &Path, data: &[f32], width: u32, height: u32, channels:
             data.len()
         )));
     }
-    let rgb: Vec<f32> = if channels == 3 { data.to_vec() } else { data.iter().flat_map(|&v| [v, v, v]).collect() };
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let png = match ext.as_deref() {
+        Some("png") => true,
+        Some("exr") => false,
+        _ => {
+            return Err(Error::InvalidParameter(format!(
+                "cannot write {}: the extension must be .png or .exr",
+                path.display()
+            )))
+        }
+    };
+    // NaN or infinity has no 8-bit encoding and no meaning as linear light:
+    // refused for every format (a PNG would quietly write NaN as black).
+    if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+        let pixel = i / channels as usize;
+        return Err(Error::InvalidParameter(format!(
+            "image has a non-finite value ({}) at row {}, column {}",
+            data[i],
+            pixel / width as usize,
+            pixel % width as usize
+        )));
+    }
+    let rgb: Vec<f32> = if channels == 3 { data.to_vec() } else { data.iter().flat_map(|&v| [v, v, v]).collect() };
     let io = |e: image::ImageError| Error::Io(format!("writing {}: {e}", path.display()));
-    match ext.as_deref() {
-        Some("png") => {
-            let bytes: Vec<u8> = rgb.iter().map(|&v| (linear_to_srgb(v) * 255.0 + 0.5) as u8).collect();
-            image::RgbImage::from_raw(width, height, bytes)
-                .ok_or_else(|| Error::Io("image buffer has the wrong size".into()))?
-                .save(path)
-                .map_err(io)
-        }
-        Some("exr") => {
-            if let Some(bad) = rgb.iter().find(|v| !v.is_finite()) {
-                return Err(Error::InvalidParameter(format!("image has a non-finite value ({bad})")));
-            }
-            image::Rgb32FImage::from_raw(width, height, rgb)
-                .ok_or_else(|| Error::Io("image buffer has the wrong size".into()))?
-                .save(path)
-                .map_err(io)
-        }
-        _ => Err(Error::InvalidParameter(format!(
-            "cannot write {}: the extension must be .png or .exr",
-            path.display()
-        ))),
+    if png {
+        let bytes: Vec<u8> = rgb.iter().map(|&v| (linear_to_srgb(v) * 255.0 + 0.5) as u8).collect();
+        image::RgbImage::from_raw(width, height, bytes)
+            .ok_or_else(|| Error::Io("image buffer has the wrong size".into()))?
+            .save(path)
+            .map_err(io)
+    } else {
+        image::Rgb32FImage::from_raw(width, height, rgb)
+            .ok_or_else(|| Error::Io("image buffer has the wrong size".into()))?
+            .save(path)
+            .map_err(io)
     }
 }
 

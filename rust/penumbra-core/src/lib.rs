@@ -2,6 +2,7 @@
 //! `penumbra-py` binds it.
 
 pub mod error;
+pub mod frame;
 pub mod gpu;
 pub mod image_io;
 pub mod light_frustum;
@@ -16,7 +17,7 @@ pub mod silhouettes;
 pub mod topology;
 
 pub use error::{Error, Result};
-pub use gpu::{adapter_summary, AdapterSummary, TimingSource, Timings};
-pub use methods::{MethodConfig, ParamValue, METHODS};
+pub use gpu::{adapter_summary, AdapterSummary, TimingMode, TimingSource, Timings};
+pub use methods::{methods, MethodConfig, ParamKind, ParamSpec, ParamValue, REGISTRY};
 pub use renderer::{Image, ImageData, RenderOptions, RenderResult, Renderer};
 pub use scene::{Camera, Mesh, Scene, SphereLight};

@@ -1,14 +1,176 @@
-//! The light's shadow-map frustum: a perspective view from the light centre,
-//! fitted to the scene's geometry (SPEC section 3).
+//! The light's shadow-map projection (SPEC section 3): a perspective
+//! frustum from the light point fitted to the scene's geometry where one
+//! frustum covers it, six cube faces where it does not.
 //!
 //! The frustum is off-centre: its window on the plane at unit depth is the
 //! bounding rectangle of every vertex's projection, so no texel is spent on
-//! empty space beside the geometry. Shadow maps store *linear* light-view depth
-//! (distance along the light's axis), so biases can be stated in world units.
+//! empty space beside the geometry. It covers at most
+//! [`MAX_HALF_ANGLE_DEGREES`] off its axis; beyond that (a floor much wider
+//! than the light is high, a room lit from inside) the cube's six 90-degree
+//! faces take over, of which only those that see geometry are rendered.
+//! Shadow maps store *linear* light-view depth (distance along the face's
+//! axis), so biases can be stated in world units.
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{DVec3, Mat4, Vec3, Vec4};
 
 use crate::error::{Error, Result};
+
+/// Which projection shadow maps use (the `projection` parameter).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ProjectionMode {
+    /// The fitted frustum where it covers the geometry, cube faces otherwise.
+    Auto,
+    /// The fitted frustum, or an error naming the angle when it cannot cover the geometry.
+    Frustum,
+    /// Six cube faces, whatever the geometry.
+    Cube,
+}
+
+impl ProjectionMode {
+    pub const NAMES: [&'static str; 3] = ["auto", "frustum", "cube"];
+
+    pub fn parse(name: &str) -> Self {
+        match name {
+            "frustum" => ProjectionMode::Frustum,
+            "cube" => ProjectionMode::Cube,
+            _ => ProjectionMode::Auto,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ProjectionMode::Auto => "auto",
+            ProjectionMode::Frustum => "frustum",
+            ProjectionMode::Cube => "cube",
+        }
+    }
+}
+
+/// The axis and up vector of cube face `i` (+x, -x, +y, -y, +z, -z): the same
+/// frames as `cube_face_frame` in `shaders/light_space.wgsl`.
+pub fn cube_face(i: usize) -> (Vec3, Vec3) {
+    match i {
+        0 => (Vec3::X, Vec3::Y),
+        1 => (Vec3::NEG_X, Vec3::Y),
+        2 => (Vec3::Y, Vec3::Z),
+        3 => (Vec3::NEG_Y, Vec3::NEG_Z),
+        4 => (Vec3::Z, Vec3::Y),
+        _ => (Vec3::NEG_Z, Vec3::Y),
+    }
+}
+
+/// The light's shadow-map projection for one render: one fitted frustum, or
+/// the six faces of a cube around the light point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LightProjection {
+    /// One frustum, or the six cube faces in the order of [`cube_face`].
+    pub faces: Vec<LightFrustum>,
+    /// Faces that see geometry (bit i: face i), the only ones rendered; 1 for a frustum.
+    pub active: u32,
+    /// The point the faces look from.
+    pub origin: Vec3,
+}
+
+impl LightProjection {
+    /// The projection from `origin` for the triangles whose corners are
+    /// `corners` (three per triangle), as `mode` asks; a frustum is fitted
+    /// around `points` (the corners, or the vertices they index).
+    pub fn fit(origin: Vec3, points: &[Vec3], corners: &[Vec3], mode: ProjectionMode) -> Result<Self> {
+        if mode != ProjectionMode::Cube {
+            match LightFrustum::fit(origin, points.iter().copied()) {
+                Ok(frustum) => return Ok(Self { faces: vec![frustum], active: 1, origin }),
+                Err(e) if mode == ProjectionMode::Frustum => return Err(e),
+                Err(_) => {}
+            }
+        }
+        Self::cube(origin, corners)
+    }
+
+    /// Six 90-degree faces around `origin`; a face is active when some
+    /// triangle may reach into its cone (no vertex-only test: a floor under
+    /// the light has its corners in the side faces and its middle below).
+    pub fn cube(origin: Vec3, corners: &[Vec3]) -> Result<Self> {
+        if corners.is_empty() {
+            return Err(Error::InvalidScene("has no geometry to fit a shadow map to".into()));
+        }
+        let o = origin.as_dvec3();
+        // The cone of face f is where a.v >= |b.v| and a.v >= |c.v|: four
+        // half-spaces through the origin. A triangle reaches into it when
+        // something of it is left after clipping by all four.
+        let mut active = 0u32;
+        let mut far = 0.0f64;
+        // The nearest depth of geometry along any face's axis: the near
+        // plane, from which filters size their search regions (PCSS's
+        // blocker search reaches across the light's projection onto it).
+        let mut nearest = f64::INFINITY;
+        for (f, (axis, up)) in (0..6).map(cube_face).enumerate() {
+            let (a, b) = (axis.as_dvec3(), up.as_dvec3());
+            let c = a.cross(b);
+            let planes = [a - b, a + b, a - c, a + c];
+            for t in corners.chunks_exact(3) {
+                let inside = clip_to_cone([t[0], t[1], t[2]].map(|p| p.as_dvec3() - o), &planes);
+                if !inside.is_empty() {
+                    active |= 1 << f;
+                    // The depth a.v is linear: its minimum over the clipped
+                    // polygon is at one of its corners.
+                    nearest = inside.iter().map(|v| a.dot(*v)).fold(nearest, f64::min);
+                }
+            }
+        }
+        for p in corners {
+            let v = p.as_dvec3() - o;
+            far = far.max(v.abs().max_element());
+        }
+        if !(far > 0.0 && far.is_finite()) {
+            return Err(surrounds_error(180.0));
+        }
+        // Linear depths are stored, so the near plane only clips what is
+        // nearer than all geometry (scene validation keeps every surface off
+        // the light, so the nearest depth is positive).
+        let far = (far * 1.02) as f32;
+        let near = ((nearest * 0.98) as f32).clamp(far * 1e-6, far);
+        let window = Vec4::new(-1.0, 1.0, -1.0, 1.0);
+        let projection = off_centre_perspective(window, near, far);
+        let faces = (0..6)
+            .map(|i| {
+                let (axis, up) = cube_face(i);
+                let view = glam::camera::rh::view::look_to_mat4(origin, axis, up);
+                LightFrustum { view, projection, window, near, far }
+            })
+            .collect();
+        Ok(Self { faces, active, origin })
+    }
+
+    pub fn is_cube(&self) -> bool {
+        self.faces.len() == 6
+    }
+
+    /// Texture layers of its maps: 1 or 6.
+    pub fn layers(&self) -> u32 {
+        self.faces.len() as u32
+    }
+
+    /// The far plane (shared by every face).
+    pub fn far(&self) -> f32 {
+        self.faces[0].far
+    }
+
+    /// Faces rendered.
+    pub fn active_faces(&self) -> u32 {
+        self.active.count_ones()
+    }
+
+    /// Each active face with its layer.
+    pub fn active_layers(&self) -> impl Iterator<Item = (u32, &LightFrustum)> {
+        self.faces.iter().enumerate().filter(|(i, _)| self.active & (1 << i) != 0).map(|(i, f)| (i as u32, f))
+    }
+
+    /// The same projection with every face's near plane moved to `near`
+    /// (see [`LightFrustum::with_near`]).
+    pub fn with_near(&self, near: f32) -> Self {
+        Self { faces: self.faces.iter().map(|f| f.with_near(near)).collect(), ..self.clone() }
+    }
+}
 
 /// Widest half-angle (per axis) one frustum may cover. Beyond it texels
 /// stretch without bound; geometry there needs an omnidirectional map.
@@ -34,8 +196,18 @@ impl LightFrustum {
         let mut sum = Vec3::ZERO;
         let mut count = 0usize;
         for p in points.clone() {
-            // Normalisation is safe: the scene check keeps every surface off the light.
-            sum += (p - center).normalize_or_zero();
+            // Normalisation is safe: the scene check keeps every surface off the
+            // light. Where the squared length would underflow or overflow
+            // float32 (a scene 1e-25 across, or 1e19), dividing by the largest
+            // component first brings it into [1, 3].
+            let d = p - center;
+            let length_squared = d.length_squared();
+            sum += if length_squared.is_normal() && length_squared.is_finite() {
+                d.normalize_or_zero()
+            } else {
+                let m = d.abs().max_element();
+                if m > 0.0 { (d / m).normalize_or_zero() } else { Vec3::ZERO }
+            };
             count += 1;
         }
         if count == 0 {
@@ -43,7 +215,13 @@ impl LightFrustum {
         }
         let mut axis = sum.normalize_or_zero();
         if axis == Vec3::ZERO || sum.length() < 1e-3 * count as f32 {
-            return Err(surrounds_error(180.0));
+            // No mean direction: geometry on every side of the light.
+            return Err(Error::InvalidScene(format!(
+                "geometry surrounds the light: the directions from the light to the vertices \
+                 cancel out (geometry on every side), so no frustum of {MAX_HALF_ANGLE_DEGREES} \
+                 degrees half-angle covers it; projection='auto' (the default) or 'cube' renders \
+                 such scenes with cube-map faces"
+            )));
         }
         let mut fitted = Self::fit_along(center, axis, points.clone())?;
         let w = fitted.window;
@@ -112,11 +290,60 @@ impl LightFrustum {
     }
 }
 
+/// The part of triangle `triangle` where `n.v >= 0` for every one of the
+/// four `planes` (Sutherland-Hodgman; each plane adds at most one corner, so
+/// seven hold the result); empty when nothing of it is left. A triangle that
+/// only touches a plane keeps the touching points.
+fn clip_to_cone(triangle: [DVec3; 3], planes: &[DVec3; 4]) -> Vec<DVec3> {
+    let mut polygon = [DVec3::ZERO; 8];
+    polygon[..3].copy_from_slice(&triangle);
+    let mut len = 3;
+    for n in planes {
+        let mut out = [DVec3::ZERO; 8];
+        let mut k = 0;
+        for i in 0..len {
+            let (p, q) = (polygon[i], polygon[(i + 1) % len]);
+            let (dp, dq) = (n.dot(p), n.dot(q));
+            if dp >= 0.0 {
+                out[k] = p;
+                k += 1;
+            }
+            // The edge crosses the plane: dp and dq have opposite signs, so
+            // dp - dq is non-zero.
+            if (dp >= 0.0) != (dq >= 0.0) {
+                out[k] = p + (q - p) * (dp / (dp - dq));
+                k += 1;
+            }
+        }
+        (polygon, len) = (out, k);
+        if len == 0 {
+            break;
+        }
+    }
+    polygon[..len].to_vec()
+}
+
+/// The error of a projection that sample `sample` (1-based) of `count` on
+/// the light's sphere (the `reference` method's) cannot have, saying which
+/// sample: the light's centre may see the geometry within one frustum where
+/// a sample on the light's surface does not.
+pub fn light_sample_error(error: Error, method: &str, sample: usize, count: usize, position: Vec3) -> Error {
+    match error {
+        Error::InvalidScene(message) => Error::InvalidScene(format!(
+            "method '{method}', light sample {sample} of {count} (at {:?}, on the light's sphere): \
+             {message}. The light's centre may see the geometry within one frustum where its \
+             samples do not; a smaller radius or a light further above the geometry also helps",
+            position.to_array()
+        )),
+        other => other,
+    }
+}
+
 fn surrounds_error(angle: f32) -> Error {
     Error::InvalidScene(format!(
         "geometry surrounds the light: a vertex lies {angle:.1} degrees off the shadow-map axis, \
-         beyond the {MAX_HALF_ANGLE_DEGREES} degrees one frustum covers (omnidirectional shadow \
-         maps are not supported yet; move the light outside the geometry's bounding region)"
+         beyond the {MAX_HALF_ANGLE_DEGREES} degrees one frustum covers; projection='auto' (the \
+         default) or 'cube' renders such scenes with cube-map faces"
     ))
 }
 
@@ -166,5 +393,77 @@ mod tests {
         let points = plane_points();
         let err = LightFrustum::fit(Vec3::new(0.0, 0.5, 0.0), points.iter().copied()).unwrap_err();
         assert!(err.to_string().contains("surrounds the light"), "{err}");
+        // A light at the centre of a cube's corners: no mean direction at all.
+        let cube: Vec<Vec3> = (0..8).map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, (i >> 2) as f32) * 2.0 - 1.0).collect();
+        let err = LightFrustum::fit(Vec3::ZERO, cube.iter().copied()).unwrap_err().to_string();
+        assert!(err.contains("every side") && !err.contains("180"), "{err}");
+    }
+
+    #[test]
+    fn a_light_sample_error_names_the_sample_and_the_remedy() {
+        let points = plane_points();
+        let err = LightFrustum::fit(Vec3::new(0.0, 0.5, 0.0), points.iter().copied()).unwrap_err();
+        let err = light_sample_error(err, "reference", 3, 16, Vec3::new(0.0, 0.5, 0.0)).to_string();
+        assert!(err.contains("light sample 3 of 16") && err.contains("degrees off") && err.contains("projection='auto'"), "{err}");
+    }
+
+    /// Two triangles of a 10 x 10 floor at y = 0.
+    fn floor() -> Vec<Vec3> {
+        let [a, b, c, d] = [(-5.0, -5.0), (5.0, -5.0), (5.0, 5.0), (-5.0, 5.0)].map(|(x, z)| Vec3::new(x, 0.0, z));
+        vec![a, c, b, a, d, c]
+    }
+
+    #[test]
+    fn auto_keeps_the_frustum_where_it_covers_and_takes_the_cube_elsewhere() {
+        let fit = |origin: Vec3, mode| LightProjection::fit(origin, &floor(), &floor(), mode);
+        let high = fit(Vec3::new(0.0, 20.0, 0.0), ProjectionMode::Auto).unwrap();
+        assert!(!high.is_cube() && high.active == 1);
+        assert_eq!(high.faces[0], LightFrustum::fit(Vec3::new(0.0, 20.0, 0.0), floor().into_iter()).unwrap());
+        // 0.5 above a 10-wide floor: 84 degrees to its corners.
+        let low = fit(Vec3::new(0.0, 0.5, 0.0), ProjectionMode::Auto).unwrap();
+        assert!(low.is_cube());
+        let err = fit(Vec3::new(0.0, 0.5, 0.0), ProjectionMode::Frustum).unwrap_err();
+        assert!(err.to_string().contains("degrees"), "{err}");
+        assert!(fit(Vec3::new(0.0, 20.0, 0.0), ProjectionMode::Cube).unwrap().is_cube());
+    }
+
+    #[test]
+    fn cube_faces_that_see_no_triangle_are_inactive() {
+        // The floor below the light: its middle is in -y, its corners in the four side faces, nothing in +y.
+        let p = LightProjection::cube(Vec3::new(0.0, 0.5, 0.0), &floor()).unwrap();
+        assert_eq!(p.active, 0b11_1011, "{:06b}", p.active);
+        assert_eq!(p.active_faces(), 5);
+        // The floor is 0.5 below the light: the nearest depth of any face.
+        assert!((p.faces[0].near - 0.49).abs() < 1e-6 && p.faces.iter().all(|f| f.near == p.faces[0].near), "{}", p.faces[0].near);
+        // A floor far below: only -y; a triangle entirely in +x: only +x.
+        assert_eq!(LightProjection::cube(Vec3::new(0.0, 50.0, 0.0), &floor()).unwrap().active, 1 << 3);
+        let right = [Vec3::new(5.0, -0.1, -0.1), Vec3::new(5.0, 0.1, 0.0), Vec3::new(5.0, -0.1, 0.1)];
+        assert_eq!(LightProjection::cube(Vec3::ZERO, &right).unwrap().active, 1);
+    }
+
+    #[test]
+    fn cube_faces_tile_every_direction_with_their_windows() {
+        // A direction's dominant axis picks its face, and the point projects
+        // inside that face's window with its depth along the axis.
+        let p = LightProjection::cube(Vec3::new(1.0, 2.0, 3.0), &floor()).unwrap();
+        for k in 0..500 {
+            let t = k as f32 * 0.37;
+            let d = Vec3::new(t.sin() * (t * 0.7).cos(), (t * 1.3).cos(), (t * 0.5).sin() + 0.01 * t.cos());
+            let abs = d.abs();
+            let face = if abs.x >= abs.y && abs.x >= abs.z {
+                if d.x > 0.0 { 0 } else { 1 }
+            } else if abs.y >= abs.z {
+                if d.y > 0.0 { 2 } else { 3 }
+            } else if d.z > 0.0 {
+                4
+            } else {
+                5
+            };
+            let f = &p.faces[face];
+            let q = f.view.transform_point3(p.origin + d * 3.0);
+            assert!((-q.z - 3.0 * abs.max_element()).abs() < 1e-4, "depth along the axis");
+            let (u, v) = (q.x / -q.z, q.y / -q.z);
+            assert!(u.abs() <= 1.0 + 1e-5 && v.abs() <= 1.0 + 1e-5, "face {face}: {u} {v}");
+        }
     }
 }

@@ -1,6 +1,7 @@
 //! The pass cache: outputs of the passes that a change of a late parameter
 //! does not affect, kept between renders and keyed by exactly the inputs
-//! that determine them.
+//! that determine them. It knows no method: entries are keyed by the pass's
+//! name and its [`PassKey`], and hold any output type.
 //!
 //! A key is the byte string of everything a pass reads: a 64-bit hash of the
 //! scene's geometry (the triangle corners the rasterising passes draw and
@@ -10,72 +11,37 @@
 //! reads. A lookup compares whole keys, so two renders share an entry only
 //! when the pass would have read the same bits; only the geometry is hashed.
 //!
-//! Memory is bounded by a small LRU per pass kind ([`CAPACITY`]); an entry
-//! is released when it falls out (or on [`PassCache::clear`]). Entries are
-//! inserted only after the render that made them has been submitted and
-//! waited for, so a concurrent render never reads a pass still in flight.
+//! Memory is bounded by a small LRU per pass ([`CachedPass::capacity`],
+//! declared by whoever owns the pass: the renderer for the G-buffer and the
+//! shadow map, each method for its own); an entry is released when it falls
+//! out (or on [`PassCache::clear`]). Entries are inserted only after the
+//! render that made them has been submitted and waited for (the frame holds
+//! them until then), so a concurrent render never reads a pass still in
+//! flight.
 
+use std::any::Any;
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex};
 
-use crate::light_frustum::LightFrustum;
+use crate::light_frustum::{LightFrustum, LightProjection};
 use crate::scene::PreparedScene;
 
-/// The pass kinds that are cached, with their names in `timings` and `stats`.
+/// A pass whose output may be cached: its name (as in `timings` and in the
+/// `reused_<name>` stats) and how many entries are kept.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PassKind {
-    GBuffer,
-    ShadowMap,
-    PenumbraVolumes,
-    Mask,
-    Estimation,
+pub struct CachedPass {
+    pub name: &'static str,
+    pub capacity: usize,
 }
-
-impl PassKind {
-    /// The pass's name, as in `timings`.
-    pub fn name(self) -> &'static str {
-        match self {
-            PassKind::GBuffer => "gbuffer",
-            PassKind::ShadowMap => "shadow_map",
-            PassKind::PenumbraVolumes => "penumbra_volumes",
-            PassKind::Mask => "mask",
-            PassKind::Estimation => "estimation",
-        }
-    }
-
-    /// Entries kept of this kind. At 512 x 512 pixels and the default
-    /// 2048-texel maps: G-buffers 36 bytes a pixel (9 MiB each), shadow maps
-    /// 4 bytes a texel (16 MiB), PVM volume maps 36 bytes a texel (144 MiB),
-    /// PVMF masks 8 bytes a texel (32 MiB), PVMF estimates 12 bytes a pixel
-    /// (3 MiB): at most about 250 MiB in all.
-    pub fn capacity(self) -> usize {
-        match self {
-            // Two cameras (or image sizes) alternating.
-            PassKind::GBuffer => 2,
-            // The map-depth schemes of several methods compared on one scene.
-            PassKind::ShadowMap => 3,
-            PassKind::PenumbraVolumes | PassKind::Mask | PassKind::Estimation => 1,
-        }
-    }
-}
-
-/// Entries of every kind, for documentation and tests.
-pub const CAPACITY: [(PassKind, usize); 5] = [
-    (PassKind::GBuffer, 2),
-    (PassKind::ShadowMap, 3),
-    (PassKind::PenumbraVolumes, 1),
-    (PassKind::Mask, 1),
-    (PassKind::Estimation, 1),
-];
 
 /// The exact inputs of one pass, as bytes.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct PassKey(Vec<u8>);
 
 impl PassKey {
-    pub fn new(kind: PassKind) -> Self {
+    pub fn new(pass: &str) -> Self {
         let mut key = Self(Vec::with_capacity(128));
-        key.bytes(kind.name().as_bytes());
+        key.bytes(pass.as_bytes());
         key
     }
 
@@ -114,6 +80,15 @@ impl PassKey {
             .f32s(&[f.near, f.far])
     }
 
+    /// Every face of a projection and which are rendered.
+    pub fn projection(&mut self, p: &LightProjection) -> &mut Self {
+        self.u32(p.active).f32s(&p.origin.to_array());
+        for face in &p.faces {
+            self.frustum(face);
+        }
+        self
+    }
+
     pub fn finish(&mut self) -> Self {
         std::mem::take(self)
     }
@@ -136,122 +111,83 @@ pub fn geometry_hash(scene: &PreparedScene) -> u64 {
     h.finish()
 }
 
-/// One kind's entries, most recently used first.
-struct Lru<V> {
-    kind: PassKind,
-    entries: Mutex<Vec<(PassKey, Arc<V>)>>,
+/// A cached output of any type.
+pub type Entry = Arc<dyn Any + Send + Sync>;
+
+/// One pass's entries, most recently used first.
+struct Lru {
+    pass: CachedPass,
+    entries: Vec<(PassKey, Entry)>,
 }
 
-impl<V> Lru<V> {
-    fn new(kind: PassKind) -> Self {
-        Self { kind, entries: Mutex::new(Vec::new()) }
-    }
-
-    fn get(&self, key: &PassKey) -> Option<Arc<V>> {
-        let mut entries = self.entries.lock().ok()?;
-        let index = entries.iter().position(|(k, _)| k == key)?;
-        let entry = entries.remove(index);
-        let value = entry.1.clone();
-        entries.insert(0, entry);
-        Some(value)
-    }
-
-    fn insert(&self, key: PassKey, value: Arc<V>) {
-        if let Ok(mut entries) = self.entries.lock() {
-            entries.retain(|(k, _)| *k != key);
-            entries.insert(0, (key, value));
-            entries.truncate(self.kind.capacity());
-        }
-    }
-
-    fn clear(&self) {
-        if let Ok(mut entries) = self.entries.lock() {
-            entries.clear();
-        }
-    }
-
-    fn len(&self) -> usize {
-        self.entries.lock().map(|e| e.len()).unwrap_or(0)
-    }
+/// The renderer's cache of pass outputs, one LRU per declared pass; when
+/// disabled it keeps nothing.
+pub struct PassCache {
+    enabled: bool,
+    passes: Mutex<Vec<Lru>>,
 }
 
-/// The renderer's cache of pass outputs, one LRU per kind. `V*` are the
-/// output types, so that this module need not know the methods.
-pub struct PassCache<G, S, V, M, E> {
-    pub gbuffer: CacheSlot<G>,
-    pub shadow_map: CacheSlot<S>,
-    pub penumbra_volumes: CacheSlot<V>,
-    pub mask: CacheSlot<M>,
-    pub estimation: CacheSlot<E>,
-}
-
-/// One kind's LRU, or nothing when the cache is off.
-pub struct CacheSlot<V>(Option<Lru<V>>);
-
-impl<V> CacheSlot<V> {
-    fn new(kind: PassKind, enabled: bool) -> Self {
-        Self(enabled.then(|| Lru::new(kind)))
-    }
-
-    /// The cached output for `key`; always None when the cache is off.
-    pub fn get(&self, key: &PassKey) -> Option<Arc<V>> {
-        self.0.as_ref().and_then(|lru| lru.get(key))
-    }
-
-    pub fn insert(&self, key: PassKey, value: Arc<V>) {
-        if let Some(lru) = &self.0 {
-            lru.insert(key, value);
-        }
-    }
-
-    fn clear(&self) {
-        if let Some(lru) = &self.0 {
-            lru.clear();
-        }
-    }
-
-    pub fn len(&self) -> usize {
-        self.0.as_ref().map_or(0, Lru::len)
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
-
-impl<G, S, V, M, E> PassCache<G, S, V, M, E> {
-    pub fn new(enabled: bool) -> Self {
-        Self {
-            gbuffer: CacheSlot::new(PassKind::GBuffer, enabled),
-            shadow_map: CacheSlot::new(PassKind::ShadowMap, enabled),
-            penumbra_volumes: CacheSlot::new(PassKind::PenumbraVolumes, enabled),
-            mask: CacheSlot::new(PassKind::Mask, enabled),
-            estimation: CacheSlot::new(PassKind::Estimation, enabled),
-        }
+impl PassCache {
+    /// A cache of `passes` (their names must differ), or none when not `enabled`.
+    pub fn new(enabled: bool, passes: impl IntoIterator<Item = CachedPass>) -> Self {
+        let lrus: Vec<Lru> = passes.into_iter().map(|pass| Lru { pass, entries: Vec::new() }).collect();
+        debug_assert!(
+            lrus.iter().enumerate().all(|(i, a)| lrus[..i].iter().all(|b| b.pass.name != a.pass.name)),
+            "a cached pass is declared twice"
+        );
+        Self { enabled, passes: Mutex::new(lrus) }
     }
 
     pub fn enabled(&self) -> bool {
-        self.gbuffer.0.is_some()
+        self.enabled
+    }
+
+    /// The output cached for `key` of pass `name`, if any and of type `T`.
+    pub fn get<T: Any + Send + Sync>(&self, name: &str, key: &PassKey) -> Option<Arc<T>> {
+        if !self.enabled {
+            return None;
+        }
+        let mut lrus = self.passes.lock().ok()?;
+        let lru = lrus.iter_mut().find(|l| l.pass.name == name)?;
+        let index = lru.entries.iter().position(|(k, _)| k == key)?;
+        let entry = lru.entries.remove(index);
+        let value = entry.1.clone();
+        lru.entries.insert(0, entry);
+        value.downcast::<T>().ok()
+    }
+
+    /// Keeps `value` as the output of pass `name` for `key` (a pass that was
+    /// not declared is not cached).
+    pub fn insert(&self, name: &str, key: PassKey, value: Entry) {
+        if !self.enabled {
+            return;
+        }
+        let Ok(mut lrus) = self.passes.lock() else { return };
+        if let Some(lru) = lrus.iter_mut().find(|l| l.pass.name == name) {
+            lru.entries.retain(|(k, _)| *k != key);
+            lru.entries.insert(0, (key, value));
+            lru.entries.truncate(lru.pass.capacity);
+        }
     }
 
     /// Drops every entry (and the GPU memory it holds).
     pub fn clear(&self) {
-        self.gbuffer.clear();
-        self.shadow_map.clear();
-        self.penumbra_volumes.clear();
-        self.mask.clear();
-        self.estimation.clear();
+        if let Ok(mut lrus) = self.passes.lock() {
+            lrus.iter_mut().for_each(|l| l.entries.clear());
+        }
     }
 
-    /// Entries held per kind.
+    /// Entries held per declared pass (all zero when disabled).
     pub fn entries(&self) -> Vec<(&'static str, usize)> {
-        vec![
-            (PassKind::GBuffer.name(), self.gbuffer.len()),
-            (PassKind::ShadowMap.name(), self.shadow_map.len()),
-            (PassKind::PenumbraVolumes.name(), self.penumbra_volumes.len()),
-            (PassKind::Mask.name(), self.mask.len()),
-            (PassKind::Estimation.name(), self.estimation.len()),
-        ]
+        match self.passes.lock() {
+            Ok(lrus) => lrus.iter().map(|l| (l.pass.name, l.entries.len())).collect(),
+            Err(_) => Vec::new(),
+        }
+    }
+
+    /// The declared passes.
+    pub fn passes(&self) -> Vec<CachedPass> {
+        self.passes.lock().map(|lrus| lrus.iter().map(|l| l.pass).collect()).unwrap_or_default()
     }
 }
 
@@ -261,38 +197,41 @@ mod tests {
 
     #[test]
     fn keys_differ_by_any_field_and_by_field_boundaries() {
-        let a = PassKey::new(PassKind::ShadowMap).f32s(&[0.0]).u32(1).finish();
-        let b = PassKey::new(PassKind::ShadowMap).f32s(&[-0.0]).u32(1).finish();
-        let c = PassKey::new(PassKind::ShadowMap).f32s(&[0.0]).u32(2).finish();
-        let d = PassKey::new(PassKind::GBuffer).f32s(&[0.0]).u32(1).finish();
+        let a = PassKey::new("shadow_map").f32s(&[0.0]).u32(1).finish();
+        let b = PassKey::new("shadow_map").f32s(&[-0.0]).u32(1).finish();
+        let c = PassKey::new("shadow_map").f32s(&[0.0]).u32(2).finish();
+        let d = PassKey::new("gbuffer").f32s(&[0.0]).u32(1).finish();
         assert!(a != b && a != c && a != d);
-        let joined = PassKey::new(PassKind::Mask).bytes(&[1, 2]).bytes(&[3]).finish();
-        let split = PassKey::new(PassKind::Mask).bytes(&[1]).bytes(&[2, 3]).finish();
+        let joined = PassKey::new("mask").bytes(&[1, 2]).bytes(&[3]).finish();
+        let split = PassKey::new("mask").bytes(&[1]).bytes(&[2, 3]).finish();
         assert_ne!(joined, split);
     }
 
     #[test]
-    fn lru_keeps_the_most_recent_entries() {
-        let slot = CacheSlot::<u32>::new(PassKind::ShadowMap, true);
-        let key = |i: u32| PassKey::new(PassKind::ShadowMap).u32(i).finish();
-        for i in 0..3 {
-            slot.insert(key(i), Arc::new(i));
+    fn lru_keeps_the_most_recent_entries_of_each_pass() {
+        let passes = [CachedPass { name: "a", capacity: 3 }, CachedPass { name: "b", capacity: 1 }];
+        let cache = PassCache::new(true, passes);
+        let key = |i: u32| PassKey::new("a").u32(i).finish();
+        for i in 0..3u32 {
+            cache.insert("a", key(i), Arc::new(i));
         }
         // Touch 0, then add 3: 1 is the least recently used and goes.
-        assert_eq!(slot.get(&key(0)).as_deref(), Some(&0));
-        slot.insert(key(3), Arc::new(3));
-        assert_eq!(slot.len(), PassKind::ShadowMap.capacity());
-        assert!(slot.get(&key(1)).is_none());
-        assert!(slot.get(&key(0)).is_some() && slot.get(&key(2)).is_some() && slot.get(&key(3)).is_some());
-        let off = CacheSlot::<u32>::new(PassKind::ShadowMap, false);
-        off.insert(key(0), Arc::new(0));
-        assert!(off.get(&key(0)).is_none() && off.is_empty());
-    }
-
-    #[test]
-    fn capacity_table_matches() {
-        for (kind, n) in CAPACITY {
-            assert_eq!(kind.capacity(), n);
-        }
+        assert_eq!(cache.get::<u32>("a", &key(0)).as_deref(), Some(&0));
+        cache.insert("a", key(3), Arc::new(3u32));
+        assert_eq!(cache.entries(), vec![("a", 3), ("b", 0)]);
+        assert!(cache.get::<u32>("a", &key(1)).is_none());
+        assert!([0, 2, 3].iter().all(|&i| cache.get::<u32>("a", &key(i)).is_some()));
+        // Another pass's entries are apart; a wrong type is a miss; an undeclared pass is not kept.
+        cache.insert("b", key(0), Arc::new(String::from("x")));
+        assert!(cache.get::<u32>("b", &key(0)).is_none());
+        assert_eq!(cache.get::<String>("b", &key(0)).as_deref().map(String::as_str), Some("x"));
+        cache.insert("c", key(0), Arc::new(0u32));
+        assert!(cache.get::<u32>("c", &key(0)).is_none());
+        cache.clear();
+        assert_eq!(cache.entries(), vec![("a", 0), ("b", 0)]);
+        let off = PassCache::new(false, passes);
+        off.insert("a", key(0), Arc::new(0u32));
+        assert!(off.get::<u32>("a", &key(0)).is_none() && !off.enabled());
+        assert_eq!(off.entries(), vec![("a", 0), ("b", 0)]);
     }
 }

@@ -59,6 +59,35 @@ pub struct Camera {
 /// Images larger than this many pixels are refused before any allocation.
 pub const MAX_PIXELS: u64 = 8192 * 8192;
 
+/// The largest coordinate magnitude a scene may have, in world units: every
+/// vertex after its transform, the light's centre plus its radius, and the
+/// camera's eye and target. The passes work in float32, which squares
+/// distances (lengths, normalisations, the irradiance's 1/d^2): two points
+/// within this range are less than 3.5e18 apart, whose square (1.2e37)
+/// leaves float32's maximum (3.4e38) a margin of 28 for the products built
+/// on it. Beyond about 1.8e19 a single squared coordinate overflows.
+/// (`benchmarks/scale_limits.py`: visibility unchanged with coordinates up
+/// to 2e17, pvm's aside.)
+pub const MAX_COORDINATE: f64 = 1e18;
+
+/// The smallest extent (largest side of the geometry's bounding box, in world
+/// units) a scene may have. Squared distances underflow float32 (smallest
+/// normal 1.2e-38) near 1e-19. Measured by `benchmarks/scale_limits.py` with
+/// this bound set to 0: on the fixed box scene of the property tests, every
+/// method's visibility (pvm's aside, see docs/stability.md) is unchanged down
+/// to an extent of 4e-22 and wrong at 4e-23 (mean difference 0.02-0.04) and
+/// 4e-24 (0.15-0.17). The bound leaves a margin of 400.
+pub const MIN_EXTENT: f64 = 1e-18;
+
+/// The error of a coordinate beyond [`MAX_COORDINATE`].
+fn beyond_range(what: &str) -> String {
+    format!(
+        "{what} lies beyond the supported range of +-{MAX_COORDINATE:e} world units: \
+         the GPU passes work in float32, whose squared distances overflow (float32 max 3.4e38) \
+         near 1.8e19; scale the scene down"
+    )
+}
+
 #[derive(Debug, Clone)]
 pub struct Scene {
     pub meshes: Vec<Mesh>,
@@ -80,6 +109,18 @@ pub struct PreparedScene {
     pub triangle_count: usize,
     /// Triangles whose area is zero to working precision; they draw nothing.
     pub degenerate_triangles: usize,
+}
+
+/// One mesh in world space, as [`Mesh::world_geometry`] checks and builds it.
+struct WorldMesh {
+    vertices: Vec<DVec3>,
+    /// The faces, with their winding reversed where the transform mirrors
+    /// (negative determinant), so front faces stay counter-clockwise in world space.
+    faces: Vec<[u32; 3]>,
+    /// Per face: the unit normal (zero for zero-area faces).
+    face_normals: Vec<DVec3>,
+    vertex_normals: Option<Vec<DVec3>>,
+    degenerate: usize,
 }
 
 #[derive(Debug, Clone)]
@@ -107,10 +148,8 @@ fn dvec(v: [f32; 3]) -> DVec3 {
 }
 
 impl Mesh {
-    /// Checks the mesh on its own and returns its world-space vertices, face
-    /// normals (zero for zero-area faces) and optional world-space vertex normals.
-    #[allow(clippy::type_complexity)]
-    fn world_geometry(&self) -> Result<(Vec<DVec3>, Vec<DVec3>, Option<Vec<DVec3>>, usize)> {
+    /// Checks the mesh on its own and returns its world-space geometry.
+    fn world_geometry(&self) -> Result<WorldMesh> {
         let name = self.name.as_str();
         if self.vertices.is_empty() {
             return Err(Error::mesh(name, "has no vertices"));
@@ -168,19 +207,27 @@ impl Mesh {
             .iter()
             .map(|&v| transform.transform_point3(dvec(v)))
             .collect();
-        if let Some(i) = world.iter().position(|v| !v.is_finite() || v.abs().max_element() > f32::MAX as f64) {
-            return Err(Error::mesh(
-                name,
-                format!("vertex {i} leaves the float32 range after the transform"),
-            ));
+        if let Some(i) = world.iter().position(|v| !v.is_finite() || v.abs().max_element() > MAX_COORDINATE) {
+            let what = if self.transform == Mat4::IDENTITY { format!("vertex {i}") } else { format!("vertex {i} after the transform") };
+            return Err(Error::mesh(name, beyond_range(&format!("{what} {:?}", world[i].to_array()))));
         }
+        // A mirroring transform (negative determinant) turns counter-clockwise
+        // faces clockwise in world space: reversing their winding keeps the
+        // front side where the transform carries it, the side its inverse
+        // transpose maps normals to (as vertex normals already are, below),
+        // instead of shading the mesh's back (black) and swapping the front
+        // and back faces the second-depth maps and the silhouettes read.
+        let faces: Vec<[u32; 3]> = if det < 0.0 {
+            self.faces.iter().map(|&[a, b, c]| [a, c, b]).collect()
+        } else {
+            self.faces.clone()
+        };
         let normals = match &self.normals {
             None => None,
             Some(normals) => Some(world_normals(name, normals, n, &transform)?),
         };
         let mut degenerate = 0;
-        let face_normals: Vec<DVec3> = self
-            .faces
+        let face_normals: Vec<DVec3> = faces
             .iter()
             .map(|f| {
                 let (a, b, c) = (world[f[0] as usize], world[f[1] as usize], world[f[2] as usize]);
@@ -196,13 +243,13 @@ impl Mesh {
                 }
             })
             .collect();
-        if degenerate == self.faces.len() {
+        if degenerate == faces.len() {
             return Err(Error::mesh(
                 name,
                 format!("all {degenerate} faces are degenerate (zero area)"),
             ));
         }
-        Ok((world, face_normals, normals, degenerate))
+        Ok(WorldMesh { vertices: world, faces, face_normals, vertex_normals: normals, degenerate })
     }
 }
 
@@ -249,6 +296,12 @@ impl SphereLight {
                 self.intensity
             )));
         }
+        if dvec(self.center).abs().max_element() + self.radius as f64 > MAX_COORDINATE {
+            return Err(Error::InvalidLight(beyond_range(&format!(
+                "the sphere of center {:?} and radius {}",
+                self.center, self.radius
+            ))));
+        }
         Ok(())
     }
 }
@@ -258,6 +311,11 @@ impl Camera {
         for (what, v) in [("eye", self.eye), ("target", self.target), ("up", self.up)] {
             if !finite3(&v) {
                 return Err(Error::InvalidCamera(format!("{what} must be finite, got {v:?}")));
+            }
+        }
+        for (what, v) in [("eye", self.eye), ("target", self.target)] {
+            if dvec(v).abs().max_element() > MAX_COORDINATE {
+                return Err(Error::InvalidCamera(beyond_range(&format!("{what} {v:?}"))));
             }
         }
         if self.width == 0 || self.height == 0 {
@@ -316,8 +374,10 @@ impl Camera {
             z_min = z_min.min(depth);
             z_max = z_max.max(depth);
         }
-        // The scene is wholly behind the camera when z_max <= 0: any positive far works.
-        let far = (z_max * 1.01).max(1e-3);
+        // The scene is wholly behind the camera when z_max <= 0: any positive
+        // far works. (No absolute floor otherwise: a scene 1e-7 across has
+        // depths of 1e-6.)
+        let far = if z_max > 0.0 { z_max * 1.01 } else { 1.0 };
         let near = (z_min * 0.99).max(far * 1e-5);
         let aspect = self.width as f32 / self.height as f32;
         (
@@ -351,21 +411,36 @@ impl Scene {
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         let mut degenerate_triangles = 0;
         for (mesh_index, mesh) in self.meshes.iter().enumerate() {
-            let (world, face_normals, vertex_normals, degenerate) = mesh.world_geometry()?;
+            let WorldMesh { vertices: world, faces, face_normals, vertex_normals, degenerate } = mesh.world_geometry()?;
             degenerate_triangles += degenerate;
             for v in &world {
                 lo = lo.min(*v);
                 hi = hi.max(*v);
             }
-            for (f, face) in mesh.faces.iter().enumerate() {
+            for (f, face) in faces.iter().enumerate() {
                 let tri = face.map(|i| world[i as usize]);
-                let distance = (closest_point_on_triangle(light_center, tri) - light_center).length();
+                let closest = closest_point_on_triangle(light_center, tri);
+                let distance = (closest - light_center).length();
                 // A light touching geometry has no defined irradiance there; a point light
-                // must lie strictly off every surface (relative tolerance of float32).
-                let tolerance = 1e-6 * (light_center.abs().max_element() + 1.0);
-                if distance <= light_radius + tolerance {
+                // must lie strictly off every surface. The passes see these points in
+                // float32, so "touching" is closer than float32's relative precision of
+                // the coordinates involved (at most two steps of the largest): relative
+                // to their magnitude, with no absolute floor, so a scene 1e-7 across or
+                // 1e7 from the origin is judged as it is at scale 1.
+                let magnitude = light_center.abs().max_element().max(closest.abs().max_element()).max(light_radius);
+                let tolerance = f32::EPSILON as f64 * magnitude;
+                if distance <= light_radius {
                     return Err(Error::InvalidScene(format!(
                         "the light (center {:?}, radius {}) intersects mesh '{}' at face {f}",
+                        self.light.center, self.light.radius, mesh.name
+                    )));
+                }
+                if distance <= light_radius + tolerance {
+                    return Err(Error::InvalidScene(format!(
+                        "the light (center {:?}, radius {}) is within float32 precision ({tolerance:.3e} \
+                         world units at coordinates of {magnitude:.3e}) of mesh '{}' at face {f}: \
+                         nearer than the coordinates can resolve (move the light away, or the scene \
+                         nearer the origin)",
                         self.light.center, self.light.radius, mesh.name
                     )));
                 }
@@ -382,7 +457,15 @@ impl Scene {
                 }
             }
             materials.push((mesh.albedo, mesh.object_id));
-            meshes.push(PreparedMesh { name: mesh.name.clone(), vertices: world, faces: mesh.faces.clone() });
+            meshes.push(PreparedMesh { name: mesh.name.clone(), vertices: world, faces });
+        }
+        let extent = (hi - lo).max_element();
+        if extent < MIN_EXTENT {
+            return Err(Error::InvalidScene(format!(
+                "the geometry spans only {extent:e} world units, below the supported {MIN_EXTENT:e}: \
+                 the GPU passes work in float32, whose squared distances underflow (smallest \
+                 normal 1.2e-38) near 1e-19; scale the scene up"
+            )));
         }
         Ok(PreparedScene {
             triangle_count: corners.len() / 3,
@@ -509,6 +592,69 @@ mod tests {
         assert!(s.prepare().is_ok(), "a point light beside the quad's plane is fine");
         s.light.center = [0.5, 0.0, 0.5];
         assert!(matches!(s.prepare(), Err(Error::InvalidScene(_))), "a point light on the quad");
+    }
+
+    #[test]
+    fn mirrored_meshes_keep_their_front_faces() {
+        let mut m = quad();
+        m.transform = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        let prepared = scene(m).prepare().unwrap();
+        for c in &prepared.corners {
+            assert_eq!(c.normal, [0.0, 1.0, 0.0], "the mirrored quad still faces up");
+        }
+        assert_eq!(prepared.meshes[0].faces, vec![[0, 1, 2], [0, 2, 3]], "winding reversed");
+        let mut m = quad();
+        m.transform = Mat4::from_scale(Vec3::new(2.0, 1.0, 1.0));
+        assert_eq!(scene(m).prepare().unwrap().meshes[0].faces, quad().faces, "no mirror, no change");
+    }
+
+    #[test]
+    fn light_clearance_is_relative_to_the_coordinates() {
+        for (scale, offset) in [(1e-7f32, 0.0f32), (1.0, 1e7), (1e10, 0.0), (1e-7, 1e-6)] {
+            let mut m = quad();
+            m.transform = Mat4::from_translation(Vec3::splat(offset)) * Mat4::from_scale(Vec3::splat(scale));
+            let mut s = scene(m);
+            s.light.center = [offset, 2.0 * scale + offset, offset];
+            s.light.radius = 0.5 * scale;
+            assert!(s.prepare().is_ok(), "scale {scale}, offset {offset}: {:?}", s.prepare().err());
+            s.light.center[1] = 0.4 * scale + offset;
+            assert!(matches!(s.prepare(), Err(Error::InvalidScene(_))), "scale {scale}, offset {offset}: the light touches the quad");
+        }
+    }
+
+    #[test]
+    fn a_light_within_float32_precision_of_a_surface_is_named_as_such() {
+        let mut m = quad();
+        m.transform = Mat4::from_translation(Vec3::splat(1e7));
+        let mut s = scene(m);
+        s.light = SphereLight { center: [1e7, 1e7 + 1.0, 1e7], radius: 0.0, intensity: [1.0; 3] };
+        let err = s.prepare().unwrap_err().to_string();
+        assert!(err.contains("within float32 precision") && !err.contains("intersects"), "{err}");
+    }
+
+    #[test]
+    fn scenes_below_the_smallest_extent_are_refused() {
+        let mut m = quad();
+        m.transform = Mat4::from_scale(Vec3::splat(1e-20));
+        let mut s = scene(m);
+        s.light.center = [0.0, 2e-20, 0.0];
+        s.light.radius = 0.0;
+        let err = s.prepare().unwrap_err().to_string();
+        assert!(err.contains("spans only") && err.contains("scale the scene up"), "{err}");
+    }
+
+    #[test]
+    fn coordinates_beyond_the_supported_range_are_named() {
+        let mut m = quad();
+        m.transform = Mat4::from_scale(Vec3::splat(1e20));
+        let err = scene(m).prepare().unwrap_err().to_string();
+        assert!(err.contains("vertex 0 after the transform") && err.contains("float32"), "{err}");
+        let mut s = scene(quad());
+        s.light.center = [0.0, 3e38, 0.0];
+        let err = s.prepare().unwrap_err();
+        assert!(matches!(&err, Error::InvalidLight(m) if m.contains("supported range")), "{err}");
+        let camera = Camera { eye: [0.0, 2e18, 0.0], target: [0.0; 3], up: [1.0, 0.0, 0.0], fov_y_degrees: 45.0, width: 8, height: 8 };
+        assert!(matches!(camera.validate(), Err(Error::InvalidCamera(m)) if m.contains("eye")));
     }
 
     #[test]

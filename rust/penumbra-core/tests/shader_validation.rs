@@ -1,6 +1,8 @@
 //! Every WGSL shader, as composed for the GPU, parses and validates with naga;
-//! and every `.wgsl` file under `src/` is part of at least one composed shader.
-//! No GPU needed.
+//! every `.wgsl` file under `src/` is listed in `shaders::FILES` and part of
+//! at least one composed shader (the files of each are derived from its
+//! imports); every Rust struct uploaded for a shader has the layout naga
+//! gives its WGSL twin. No GPU needed.
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -29,16 +31,43 @@ fn every_shader_validates_with_naga() {
 }
 
 #[test]
-fn every_wgsl_file_is_validated() {
+fn every_wgsl_file_is_listed_and_validated() {
     let mut on_disk = BTreeSet::new();
     wgsl_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"), &mut on_disk);
     assert!(!on_disk.is_empty());
-    let covered: BTreeSet<String> = penumbra_core::shaders::all()
-        .iter()
-        .flat_map(|(_, _, files)| files.iter().map(|f| f.to_string()))
-        .collect();
+    let listed: BTreeSet<String> = penumbra_core::shaders::FILES.iter().map(|(p, _)| p.to_string()).collect();
+    assert_eq!(on_disk, listed, "shaders::FILES must list exactly the .wgsl files under src/");
+    let covered: BTreeSet<String> = penumbra_core::shaders::used_files().iter().map(|f| f.to_string()).collect();
     let missing: Vec<_> = on_disk.difference(&covered).collect();
     assert!(missing.is_empty(), "WGSL files in no composed shader: {missing:?}");
+    for (path, _) in penumbra_core::shaders::FILES {
+        // Every import names a listed file, without cycles.
+        penumbra_core::shaders::files_of(path).unwrap();
+    }
+}
+
+/// Each field of a Rust struct uploaded for a shader sits where naga lays out
+/// the WGSL struct's member of the same name, and the sizes agree.
+#[test]
+fn rust_structs_match_their_wgsl_layouts() {
+    let structs = penumbra_core::shaders::gpu_structs();
+    assert!(structs.len() >= 10);
+    for s in structs {
+        let source = penumbra_core::shaders::compose(s.file);
+        let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}: {}", s.file, e.emit_to_string(&source)));
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let (handle, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(s.wgsl))
+            .unwrap_or_else(|| panic!("{}: no struct {} in {}", s.rust, s.wgsl, s.file));
+        let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("{} is not a struct", s.wgsl) };
+        assert_eq!(*span as usize, s.size, "{} is {} bytes, WGSL {} is {span} (alignment {:?})", s.rust, s.size, s.wgsl, layouter[handle].alignment);
+        let wgsl: Vec<(String, usize)> = members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize)).collect();
+        let rust: Vec<(String, usize)> = s.fields.iter().map(|(n, o)| (n.to_string(), *o)).collect();
+        assert_eq!(rust, wgsl, "{} against {} in {}: (field, offset)", s.rust, s.wgsl, s.file);
+    }
 }
 
 /// Branches and loops in a block, nested ones included.

@@ -245,6 +245,47 @@ pub fn create_texture(
     })
 }
 
+/// A 2D array texture of `layers` layers (shadow maps: 1 for a frustum, 6 for cube faces).
+pub fn create_array_texture(
+    device: &wgpu::Device,
+    label: &str,
+    (width, height): (u32, u32),
+    layers: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: layers },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+/// A texture binding of an array texture (shadow maps and light-space images).
+pub fn array_texture(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture { sample_type, view_dimension: wgpu::TextureViewDimension::D2Array, multisampled: false },
+        count: None,
+    }
+}
+
+/// A shadow map (`texture_depth_2d_array`).
+pub fn depth_array(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    array_texture(binding, wgpu::TextureSampleType::Depth)
+}
+
+/// A light-space float image (`texture_2d_array<f32>`, read with `textureLoad`).
+pub fn float_array(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    array_texture(binding, wgpu::TextureSampleType::Float { filterable: false })
+}
+
 /// Depth test `Less` with writes: the first surface along each ray wins.
 pub fn nearest_depth(format: wgpu::TextureFormat) -> Option<wgpu::DepthStencilState> {
     Some(wgpu::DepthStencilState {

@@ -2,8 +2,9 @@
 
 pub mod context;
 pub mod layout;
+pub mod pool;
 pub mod profiler;
 pub mod readback;
 
 pub use context::{adapter_summary, AdapterSummary, GpuContext};
-pub use profiler::{PassTimestamps, Profiler, TimingSource, Timings};
+pub use profiler::{PassTimestamps, Profiler, TimingMode, TimingSource, Timings};

@@ -4,6 +4,7 @@
 use std::time::Instant;
 
 use crate::error::{Error, Result};
+use crate::gpu::pool::ResourcePool;
 use crate::gpu::GpuContext;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -17,6 +18,34 @@ impl TimingSource {
         match self {
             TimingSource::GpuTimestamps => "gpu_timestamps",
             TimingSource::CpuClock => "cpu_clock",
+        }
+    }
+}
+
+/// How a renderer times its passes, as the caller names it: `"auto"` (GPU
+/// timestamps where the adapter has them, else CPU clocks) or `"cpu"` (CPU
+/// clocks around each pass).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimingMode {
+    Auto,
+    Cpu,
+}
+
+impl TimingMode {
+    /// Whether to use GPU timestamp queries where the adapter has them.
+    pub fn uses_timestamps(self) -> bool {
+        self == TimingMode::Auto
+    }
+}
+
+impl std::str::FromStr for TimingMode {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "auto" => Ok(TimingMode::Auto),
+            "cpu" => Ok(TimingMode::Cpu),
+            other => Err(Error::InvalidParameter(format!("timing must be 'auto' or 'cpu', got {other:?}"))),
         }
     }
 }
@@ -74,6 +103,7 @@ impl<'q> PassTimestamps<'q> {
 /// one submission; without, each pass is submitted and waited for alone.
 pub struct Profiler<'c> {
     ctx: &'c GpuContext,
+    pool: &'c ResourcePool,
     encoder: wgpu::CommandEncoder,
     queries: Option<wgpu::QuerySet>,
     names: Vec<String>,
@@ -84,7 +114,7 @@ pub struct Profiler<'c> {
 const MAX_PASSES: u32 = 32;
 
 impl<'c> Profiler<'c> {
-    pub fn new(ctx: &'c GpuContext, use_timestamps: bool) -> Self {
+    pub fn new(ctx: &'c GpuContext, pool: &'c ResourcePool, use_timestamps: bool) -> Self {
         let queries = (use_timestamps && ctx.has_timestamps()).then(|| {
             ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("penumbra::timestamps"),
@@ -94,6 +124,7 @@ impl<'c> Profiler<'c> {
         });
         Self {
             ctx,
+            pool,
             encoder: Self::new_encoder(ctx),
             queries,
             names: Vec::new(),
@@ -165,18 +196,11 @@ impl<'c> Profiler<'c> {
             Some(set) => {
                 let count = 2 * self.names.len() as u32;
                 let bytes = count as u64 * wgpu::QUERY_SIZE as u64;
-                let resolve = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("penumbra::timestamps_resolve"),
-                    size: bytes.max(8),
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                let read = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("penumbra::timestamps_read"),
-                    size: bytes.max(8),
-                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                    mapped_at_creation: false,
-                });
+                let device = &self.ctx.device;
+                let resolve_usage = wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC;
+                let resolve = self.pool.buffer(device, "penumbra::timestamps_resolve", bytes.max(8), resolve_usage);
+                let read_usage = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
+                let read = self.pool.buffer(device, "penumbra::timestamps_read", bytes.max(8), read_usage);
                 if count > 0 {
                     self.encoder.resolve_query_set(&set, 0..count, &resolve, 0);
                     self.encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, bytes);
@@ -189,7 +213,11 @@ impl<'c> Profiler<'c> {
                     let view = read.slice(..).get_mapped_range().map_err(|e| {
                         Error::Gpu(format!("mapping the timestamp buffer failed: {e}"))
                     })?;
-                    bytemuck::pod_collect_to_vec(&view[..bytes as usize])
+                    let ticks = bytemuck::pod_collect_to_vec(&view[..bytes as usize]);
+                    drop(view);
+                    // A pooled buffer: unmapped for its next user.
+                    read.unmap();
+                    ticks
                 } else {
                     Vec::new()
                 };
@@ -205,5 +233,19 @@ impl<'c> Profiler<'c> {
         };
         let encoder = Self::new_encoder(self.ctx);
         Ok((Timings { source, passes }, encoder))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timing_modes_parse_by_name() {
+        assert_eq!("auto".parse::<TimingMode>(), Ok(TimingMode::Auto));
+        assert_eq!("cpu".parse::<TimingMode>(), Ok(TimingMode::Cpu));
+        assert!(TimingMode::Auto.uses_timestamps() && !TimingMode::Cpu.uses_timestamps());
+        let err = "sometimes".parse::<TimingMode>().unwrap_err();
+        assert!(matches!(&err, Error::InvalidParameter(m) if m.contains("'auto' or 'cpu'")), "{err}");
     }
 }

@@ -2,11 +2,14 @@
 //! copy and the padding is stripped here, in one place.
 
 use crate::error::{Error, Result};
+use crate::gpu::pool::{PooledBuffer, ResourcePool};
 use crate::gpu::GpuContext;
+
+const READBACK: wgpu::BufferUsages = wgpu::BufferUsages::COPY_DST.union(wgpu::BufferUsages::MAP_READ);
 
 /// A texture copy recorded into an encoder, waiting to be mapped.
 pub struct PendingReadback {
-    buffer: wgpu::Buffer,
+    buffer: PooledBuffer,
     width: u32,
     height: u32,
     row_bytes: u32,
@@ -17,11 +20,12 @@ pub struct PendingReadback {
 /// texture's depth) into a mappable buffer.
 pub fn copy_texture(
     device: &wgpu::Device,
+    pool: &ResourcePool,
     encoder: &mut wgpu::CommandEncoder,
     texture: &wgpu::Texture,
     aspect: wgpu::TextureAspect,
 ) -> PendingReadback {
-    let (width, height) = (texture.width(), texture.height());
+    let (width, height, layers) = (texture.width(), texture.height(), texture.depth_or_array_layers());
     let bytes_per_texel = texture
         .format()
         .block_copy_size(Some(aspect))
@@ -29,12 +33,7 @@ pub fn copy_texture(
     let row_bytes = width * bytes_per_texel;
     let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let padded_row_bytes = row_bytes.div_ceil(align) * align;
-    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("penumbra::readback"),
-        size: padded_row_bytes as u64 * height as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
+    let buffer = pool.buffer(device, "penumbra::readback", padded_row_bytes as u64 * height as u64 * layers as u64, READBACK);
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {
             texture,
@@ -50,19 +49,21 @@ pub fn copy_texture(
                 rows_per_image: Some(height),
             },
         },
-        wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        wgpu::Extent3d { width, height, depth_or_array_layers: layers },
     );
-    PendingReadback { buffer, width, height, row_bytes, padded_row_bytes }
+    // Layers follow each other: as many rows again per layer.
+    PendingReadback { buffer, width, height: height * layers, row_bytes, padded_row_bytes }
 }
 
 /// Records a copy of the first `bytes` (a multiple of 4) of `source` into a mappable buffer.
-pub fn copy_buffer(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, source: &wgpu::Buffer, bytes: u32) -> PendingReadback {
-    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("penumbra::readback_buffer"),
-        size: bytes as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
+pub fn copy_buffer(
+    device: &wgpu::Device,
+    pool: &ResourcePool,
+    encoder: &mut wgpu::CommandEncoder,
+    source: &wgpu::Buffer,
+    bytes: u32,
+) -> PendingReadback {
+    let buffer = pool.buffer(device, "penumbra::readback_buffer", bytes as u64, READBACK);
     encoder.copy_buffer_to_buffer(source, 0, &buffer, 0, bytes as u64);
     PendingReadback { buffer, width: bytes / 4, height: 1, row_bytes: bytes, padded_row_bytes: bytes }
 }

@@ -1,217 +1,216 @@
-//! Soft-shadow methods (SPEC section 4): names, parameters and their checks.
-//! Each method lives in its own module with its WGSL beside it.
+//! Soft-shadow methods (SPEC section 4): one type per method behind one
+//! trait, each in its own folder with its WGSL beside it, and the registry
+//! that lists them. Adding a method is its module, its WGSL and one line in
+//! [`REGISTRY`]; the renderer and the pass cache know no method by name.
 
+use std::any::Any;
 use std::collections::BTreeMap;
+use std::fmt;
+use std::sync::Arc;
 
 use crate::error::{Error, Result};
+use crate::frame::Frame;
+use crate::gpu::pool::{PooledTexture, ResourcePool};
+use crate::pass_cache::CachedPass;
 
 pub mod hard;
+pub mod params;
 pub mod pcf;
 pub mod pcss;
 pub mod pvm;
 pub mod pvmf;
 pub mod reference;
 
+pub use params::{ParamKind, ParamSet, ParamSpec, ParamValue};
 
-pub use hard::{BiasMode, HardParams, ShadowMapSettings};
-pub use pcf::PcfParams;
-pub use pcss::PcssParams;
-pub use pvm::PvmParams;
-pub use pvmf::PvmfParams;
-pub use reference::ReferenceParams;
-
-/// A parameter value as it arrives from Python or the CLI.
-#[derive(Debug, Clone, PartialEq)]
-pub enum ParamValue {
-    Bool(bool),
-    Int(i64),
-    Float(f64),
-    Str(String),
+/// What a method's passes leave for the renderer: the visibility image
+/// (visibility-format, the camera's size) that shading reads and readback returns.
+pub struct MethodOutput {
+    pub visibility: PooledTexture,
 }
 
-impl ParamValue {
-    fn type_name(&self) -> &'static str {
-        match self {
-            ParamValue::Bool(_) => "bool",
-            ParamValue::Int(_) => "int",
-            ParamValue::Float(_) => "float",
-            ParamValue::Str(_) => "str",
-        }
+/// One soft-shadow method.
+///
+/// A method declares its parameters once ([`Method::specs`]), reads them
+/// into its own typed form ([`Method::params`], where rules between
+/// parameters are checked), builds its pipelines once ([`Method::new`], on
+/// its first render) and records all of its passes for one render against
+/// a [`Frame`], returning its visibility; it sets its own stats, counters
+/// and intermediate images on the frame.
+pub trait Method: Send + Sync + Sized + 'static {
+    /// Its name in `render(scene, name)` (SPEC section 4).
+    const NAME: &'static str;
+    /// The paper and sections it implements, for the docs and `penumbra methods`.
+    const PAPER: &'static str;
+    /// Its parameters in typed form.
+    type Params: Send + Sync + 'static;
+
+    /// Every parameter it takes, with type, range, default and a line of docs.
+    fn specs() -> Vec<ParamSpec>;
+
+    /// Typed parameters from a checked set; rules between parameters are
+    /// checked here ([`Error::InvalidParameter`]).
+    fn params(set: &ParamSet) -> Result<Self::Params>;
+
+    /// The passes whose outputs the pass cache may keep for it (the
+    /// G-buffer is always cacheable; the centre shadow map is
+    /// [`crate::passes::shadow_map::CENTRE_MAP`]).
+    fn cached_passes() -> &'static [CachedPass] {
+        &[]
+    }
+
+    /// Builds its pipelines.
+    fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self;
+
+    /// Records every pass of one render.
+    fn record(&self, frame: &mut Frame<'_>, params: &Self::Params) -> Result<MethodOutput>;
+}
+
+/// A built method, its typed parameters erased.
+pub trait DynMethod: Send + Sync {
+    fn record(&self, frame: &mut Frame<'_>, params: &(dyn Any + Send + Sync)) -> Result<MethodOutput>;
+}
+
+impl<M: Method> DynMethod for M {
+    fn record(&self, frame: &mut Frame<'_>, params: &(dyn Any + Send + Sync)) -> Result<MethodOutput> {
+        let params = params
+            .downcast_ref::<M::Params>()
+            .ok_or_else(|| Error::InvalidParameter(format!("parameters given to method '{}' are another method's", M::NAME)))?;
+        Method::record(self, frame, params)
     }
 }
 
-/// Every method name SPEC section 4 defines, and whether it is implemented.
-pub const METHODS: &[(&str, bool)] = &[
-    ("hard", true),
-    ("pcf", true),
-    ("pcss", true),
-    ("reference", true),
-    ("adaptive", false),
-    ("pvm", true),
-    ("pvmf", true),
-    ("wedges", false),
-    ("backprojection", false),
+/// A registry entry: what is known of a method without a GPU, and how to build it.
+pub struct Registered {
+    pub name: &'static str,
+    pub paper: &'static str,
+    pub specs: fn() -> Vec<ParamSpec>,
+    pub cached_passes: fn() -> &'static [CachedPass],
+    parse: fn(&ParamSet) -> Result<Arc<dyn Any + Send + Sync>>,
+    pub(crate) build: fn(&wgpu::Device, &ResourcePool) -> Box<dyn DynMethod>,
+}
+
+fn parse_typed<M: Method>(set: &ParamSet) -> Result<Arc<dyn Any + Send + Sync>> {
+    Ok(Arc::new(M::params(set)?))
+}
+
+fn build<M: Method>(device: &wgpu::Device, pool: &ResourcePool) -> Box<dyn DynMethod> {
+    Box::new(M::new(device, pool))
+}
+
+/// The registry entry of method `M`.
+pub const fn entry<M: Method>() -> Registered {
+    Registered {
+        name: M::NAME,
+        paper: M::PAPER,
+        specs: M::specs,
+        cached_passes: M::cached_passes,
+        parse: parse_typed::<M>,
+        build: build::<M>,
+    }
+}
+
+/// Every implemented method, in the order of SPEC section 4.
+pub static REGISTRY: &[Registered] = &[
+    entry::<hard::HardShadow>(),
+    entry::<pcf::PercentageCloserFiltering>(),
+    entry::<pcss::PercentageCloserSoftShadows>(),
+    entry::<reference::ReferenceShadows>(),
+    entry::<pvm::PenumbraVolumeMaps>(),
+    entry::<pvmf::PenumbraVolumeMaskFiltering>(),
 ];
 
+/// Every method name SPEC section 4 defines, in its order.
+pub const SPEC_METHODS: &[&str] =
+    &["hard", "pcf", "pcss", "reference", "adaptive", "pvm", "pvmf", "wedges", "backprojection", "raytraced"];
+
+/// Every method name of SPEC section 4 with whether it is implemented.
+pub fn methods() -> Vec<(&'static str, bool)> {
+    SPEC_METHODS.iter().map(|&name| (name, REGISTRY.iter().any(|r| r.name == name))).collect()
+}
+
+/// The registry entry of `name`.
+pub fn registered(name: &str) -> Result<(usize, &'static Registered)> {
+    REGISTRY.iter().enumerate().find(|(_, r)| r.name == name).ok_or_else(|| {
+        let implemented: Vec<&str> = REGISTRY.iter().map(|r| r.name).collect();
+        Error::InvalidParameter(if SPEC_METHODS.contains(&name) {
+            format!("method '{name}' is not implemented yet; available: {}", implemented.join(", "))
+        } else {
+            format!("unknown method '{name}'; available: {}", implemented.join(", "))
+        })
+    })
+}
+
 /// A method with its checked parameters.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MethodConfig {
-    Hard(HardParams),
-    Pcf(PcfParams),
-    Pcss(PcssParams),
-    Pvm(PvmParams),
-    Pvmf(PvmfParams),
-    Reference(ReferenceParams),
+#[derive(Clone)]
+pub struct MethodConfig {
+    index: usize,
+    set: ParamSet,
+    typed: Arc<dyn Any + Send + Sync>,
 }
 
 impl MethodConfig {
     pub fn parse(method: &str, params: &BTreeMap<String, ParamValue>) -> Result<Self> {
-        let mut reader = ParamReader::new(method, params);
-        let config = match method {
-            "hard" => MethodConfig::Hard(HardParams::read(&mut reader)?),
-            "pcf" => MethodConfig::Pcf(PcfParams::read(&mut reader)?),
-            "pcss" => MethodConfig::Pcss(PcssParams::read(&mut reader)?),
-            "pvm" => MethodConfig::Pvm(PvmParams::read(&mut reader)?),
-            "pvmf" => MethodConfig::Pvmf(PvmfParams::read(&mut reader)?),
-            "reference" => MethodConfig::Reference(ReferenceParams::read(&mut reader)?),
-            _ => {
-                let implemented: Vec<&str> = METHODS.iter().filter(|m| m.1).map(|m| m.0).collect();
-                return Err(Error::InvalidParameter(
-                    if METHODS.iter().any(|m| m.0 == method) {
-                        format!("method '{method}' is not implemented yet; available: {implemented:?}")
-                    } else {
-                        format!("unknown method '{method}'; available: {implemented:?}")
-                    },
-                ));
-            }
-        };
-        reader.finish()?;
-        Ok(config)
+        let (index, entry) = registered(method)?;
+        let set = ParamSet::parse(method, &(entry.specs)(), params)?;
+        let typed = (entry.parse)(&set)?;
+        Ok(Self { index, set, typed })
     }
 
     pub fn name(&self) -> &'static str {
-        match self {
-            MethodConfig::Hard(_) => "hard",
-            MethodConfig::Pcf(_) => "pcf",
-            MethodConfig::Pcss(_) => "pcss",
-            MethodConfig::Pvm(_) => "pvm",
-            MethodConfig::Pvmf(_) => "pvmf",
-            MethodConfig::Reference(_) => "reference",
-        }
+        REGISTRY[self.index].name
+    }
+
+    /// The index of the method in [`REGISTRY`].
+    pub fn index(&self) -> usize {
+        self.index
     }
 
     /// The parameters in effect, defaults included, for the result's record.
     pub fn effective_params(&self) -> BTreeMap<String, ParamValue> {
-        match self {
-            MethodConfig::Hard(p) => p.effective(),
-            MethodConfig::Pcf(p) => p.effective(),
-            MethodConfig::Pcss(p) => p.effective(),
-            MethodConfig::Pvm(p) => p.effective(),
-            MethodConfig::Pvmf(p) => p.effective(),
-            MethodConfig::Reference(p) => p.effective(),
-        }
+        self.set.effective()
     }
 
-    /// The shadow maps this method renders (from the light centre, or from
-    /// each light sample for `reference`).
-    pub fn shadow_map(&self) -> &ShadowMapSettings {
-        match self {
-            MethodConfig::Hard(p) => p,
-            MethodConfig::Pcf(p) => &p.shadow,
-            MethodConfig::Pcss(p) => &p.shadow,
-            MethodConfig::Pvm(p) => &p.shadow,
-            MethodConfig::Pvmf(p) => &p.shadow,
-            MethodConfig::Reference(p) => &p.shadow,
-        }
+    pub(crate) fn typed(&self) -> &(dyn Any + Send + Sync) {
+        &*self.typed
     }
 }
 
-/// Reads named parameters with defaults and ranges; `finish` refuses the rest.
-pub struct ParamReader<'a> {
-    method: &'a str,
-    params: &'a BTreeMap<String, ParamValue>,
-    known: Vec<&'static str>,
+impl fmt::Debug for MethodConfig {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("MethodConfig").field("method", &self.name()).field("params", &self.set).finish()
+    }
 }
 
-impl<'a> ParamReader<'a> {
-    pub fn new(method: &'a str, params: &'a BTreeMap<String, ParamValue>) -> Self {
-        Self { method, params, known: Vec::new() }
+impl PartialEq for MethodConfig {
+    fn eq(&self, other: &Self) -> bool {
+        self.index == other.index && self.set == other.set
     }
+}
 
-    fn wrong_type(&self, name: &str, expected: &str, got: &ParamValue) -> Error {
-        Error::InvalidParameter(format!(
-            "parameter '{name}' of method '{}' must be {expected}, got {} {got:?}",
-            self.method,
-            got.type_name()
-        ))
-    }
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-    fn out_of_range(&self, name: &str, value: impl std::fmt::Display, range: &str) -> Error {
-        Error::InvalidParameter(format!(
-            "parameter '{name}' of method '{}' must be in {range}, got {value}",
-            self.method
-        ))
-    }
-
-    pub fn int(&mut self, name: &'static str, default: i64, min: i64, max: i64) -> Result<i64> {
-        self.known.push(name);
-        let value = match self.params.get(name) {
-            None => default,
-            Some(ParamValue::Int(v)) => *v,
-            Some(other) => return Err(self.wrong_type(name, "an integer", other)),
-        };
-        if value < min || value > max {
-            return Err(self.out_of_range(name, value, &format!("[{min}, {max}]")));
-        }
-        Ok(value)
-    }
-
-    pub fn float(&mut self, name: &'static str, default: f64, min: f64, max: f64) -> Result<f64> {
-        self.known.push(name);
-        let value = match self.params.get(name) {
-            None => default,
-            Some(ParamValue::Float(v)) => *v,
-            Some(ParamValue::Int(v)) => *v as f64,
-            Some(other) => return Err(self.wrong_type(name, "a number", other)),
-        };
-        if !value.is_finite() || value < min || value > max {
-            return Err(self.out_of_range(name, value, &format!("[{min}, {max}]")));
-        }
-        Ok(value)
-    }
-
-    pub fn bool(&mut self, name: &'static str, default: bool) -> Result<bool> {
-        self.known.push(name);
-        match self.params.get(name) {
-            None => Ok(default),
-            Some(ParamValue::Bool(b)) => Ok(*b),
-            Some(other) => Err(self.wrong_type(name, "a bool", other)),
+    #[test]
+    fn every_method_is_in_the_spec_and_declares_distinct_parameters() {
+        for r in REGISTRY {
+            assert!(SPEC_METHODS.contains(&r.name), "{} is not a SPEC method", r.name);
+            let specs = (r.specs)();
+            for (i, s) in specs.iter().enumerate() {
+                assert!(specs[..i].iter().all(|t| t.name != s.name), "{}: '{}' declared twice", r.name, s.name);
+                assert!(!s.doc.is_empty(), "{}: '{}' has no doc", r.name, s.name);
+            }
+            // The defaults pass the method's own checks.
+            MethodConfig::parse(r.name, &BTreeMap::new()).unwrap();
         }
     }
 
-    pub fn choice(&mut self, name: &'static str, default: &'static str, choices: &[&'static str]) -> Result<&'static str> {
-        self.known.push(name);
-        match self.params.get(name) {
-            None => Ok(default),
-            Some(ParamValue::Str(s)) => choices.iter().copied().find(|c| c == s).ok_or_else(|| {
-                Error::InvalidParameter(format!(
-                    "parameter '{name}' of method '{}' must be one of {choices:?}, got {s:?}",
-                    self.method
-                ))
-            }),
-            Some(other) => Err(self.wrong_type(name, &format!("one of {choices:?}"), other)),
-        }
-    }
-
-    pub fn finish(self) -> Result<()> {
-        let unknown: Vec<&String> = self.params.keys().filter(|k| !self.known.contains(&k.as_str())).collect();
-        if unknown.is_empty() {
-            Ok(())
-        } else {
-            Err(Error::InvalidParameter(format!(
-                "unknown parameter(s) {unknown:?} for method '{}'; it takes {:?}",
-                self.method, self.known
-            )))
-        }
+    #[test]
+    fn unknown_and_planned_methods_are_named() {
+        let e = MethodConfig::parse("magic", &BTreeMap::new()).unwrap_err().to_string();
+        assert!(e.starts_with("unknown method 'magic'; available: hard"), "{e}");
+        let e = MethodConfig::parse("wedges", &BTreeMap::new()).unwrap_err().to_string();
+        assert!(e.contains("'wedges' is not implemented"), "{e}");
     }
 }

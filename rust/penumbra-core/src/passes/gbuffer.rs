@@ -1,10 +1,14 @@
 //! The camera G-buffer (SPEC section 3): world position with view depth, and
 //! shading normal with mesh index, in two float32 targets.
 
-use wgpu::util::DeviceExt;
-
+use crate::frame::FrameContext;
 use crate::gpu::layout;
+use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool, TextureKey};
 use crate::gpu::PassTimestamps;
+use crate::pass_cache::CachedPass;
+
+/// The G-buffer as the pass cache keeps it: two cameras (or image sizes) alternating.
+pub const GBUFFER: CachedPass = CachedPass { name: "gbuffer", capacity: 2 };
 
 pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -12,55 +16,42 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CameraUniforms {
-    view_proj: [[f32; 4]; 4],
-    view: [[f32; 4]; 4],
+pub struct CameraUniforms {
+    pub(crate) view_proj: [[f32; 4]; 4],
+    pub(crate) view: [[f32; 4]; 4],
 }
 
 pub struct GBufferPass {
     pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    layout: Layout,
 }
 
-/// The G-buffer of one frame.
+/// The G-buffer of one frame, in pooled textures.
 pub struct GBuffer {
-    pub position: wgpu::Texture,
-    pub normal: wgpu::Texture,
-    pub position_view: wgpu::TextureView,
-    pub normal_view: wgpu::TextureView,
-    depth_view: wgpu::TextureView,
+    pub position: PooledTexture,
+    pub normal: PooledTexture,
+    depth: PooledTexture,
     pub size: (u32, u32),
 }
 
 impl GBuffer {
-    pub fn new(device: &wgpu::Device, size: (u32, u32)) -> Self {
+    pub fn new(device: &wgpu::Device, pool: &ResourcePool, size: (u32, u32)) -> Self {
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;
-        let position = layout::create_texture(device, "gbuffer::position", size, POSITION_FORMAT, usage);
-        let normal = layout::create_texture(device, "gbuffer::normal", size, NORMAL_FORMAT, usage);
-        let depth = layout::create_texture(
-            device,
-            "gbuffer::depth",
-            size,
-            DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
         Self {
-            position_view: layout::view(&position),
-            normal_view: layout::view(&normal),
-            depth_view: layout::view(&depth),
-            position,
-            normal,
+            position: pool.texture(device, "gbuffer::position", TextureKey::plain(size, POSITION_FORMAT, usage)),
+            normal: pool.texture(device, "gbuffer::normal", TextureKey::plain(size, NORMAL_FORMAT, usage)),
+            depth: pool.texture(device, "gbuffer::depth", TextureKey::plain(size, DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT)),
             size,
         }
     }
 }
 
 impl GBufferPass {
-    pub fn new(device: &wgpu::Device) -> Self {
-        let layout = layout::bind_group_layout(device, "gbuffer::layout", &[layout::uniform(0)]);
-        let module = crate::shaders::module(device, "gbuffer::shader", crate::shaders::gbuffer());
+    pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
+        let layout = pool.layout(device, "gbuffer::layout", &[layout::uniform(0)]);
+        let module = crate::shaders::module(device, "gbuffer::shader", crate::shaders::compose("passes/gbuffer.wgsl"));
         let buffers = [Some(super::corner_layout(&super::CORNER_ATTRIBUTES))];
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("gbuffer::pipeline"),
@@ -90,44 +81,35 @@ impl GBufferPass {
         Self { pipeline, layout }
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// Draws the scene from the camera into the frame's G-buffer.
     pub fn record(
         &self,
-        device: &wgpu::Device,
+        ctx: &FrameContext<'_>,
         encoder: &mut wgpu::CommandEncoder,
-        target: &GBuffer,
-        vertices: &wgpu::Buffer,
-        vertex_count: u32,
         view: glam::Mat4,
         projection: glam::Mat4,
         timestamps: Option<PassTimestamps<'_>>,
     ) {
-        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("gbuffer::uniforms"),
-            contents: bytemuck::bytes_of(&CameraUniforms {
-                view_proj: super::mat4(projection * view),
-                view: super::mat4(view),
-            }),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bind_group = layout::bind_group(
-            device,
-            "gbuffer::bind_group",
-            &self.layout,
-            &[uniforms.as_entire_binding()],
+        let target = &ctx.gbuffer;
+        let uniforms = super::shadow_map::uniform_buffer(
+            ctx,
+            "gbuffer::uniforms",
+            &CameraUniforms { view_proj: super::mat4(projection * view), view: super::mat4(view) },
         );
+        let bind_group = ctx.pool.bind_group(ctx.device, "gbuffer::bind_group", &self.layout, &[Binding::Buffer(&uniforms)]);
+        let (vertices, vertex_count) = ctx.vertices();
         let clear = |c: wgpu::Color| wgpu::Operations { load: wgpu::LoadOp::Clear(c), store: wgpu::StoreOp::Store };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer::pass"),
             color_attachments: &[
                 Some(wgpu::RenderPassColorAttachment {
-                    view: &target.position_view,
+                    view: &target.position.view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: clear(wgpu::Color::TRANSPARENT),
                 }),
                 Some(wgpu::RenderPassColorAttachment {
-                    view: &target.normal_view,
+                    view: &target.normal.view,
                     depth_slice: None,
                     resolve_target: None,
                     // w = -1 marks the background (common.wgsl).
@@ -135,7 +117,7 @@ impl GBufferPass {
                 }),
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &target.depth_view,
+                view: &target.depth.view,
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),

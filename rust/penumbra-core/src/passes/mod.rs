@@ -2,8 +2,11 @@
 //! map, and the shading of SPEC section 3.
 
 pub mod gbuffer;
+pub mod samplers;
+pub mod screen;
 pub mod shading;
 pub mod shadow_map;
+pub mod shadow_test;
 pub mod volumes;
 
 /// Vertex layout of [`crate::scene::CornerVertex`]: position, normal, mesh index.

@@ -1,3 +1,5 @@
+#import shaders/receiver.wgsl
+
 // Shading of SPEC section 3, shared by every method:
 //   radiance = albedo / pi * E(p) * v(p) + albedo * ambient
 // with E the unoccluded irradiance of the sphere light and v the method's visibility.
@@ -11,8 +13,6 @@ struct ShadingUniforms {
     eye: vec4<f32>,
 };
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
 @group(0) @binding(2) var visibility: texture_2d<f32>;
 // Per mesh: albedo rgb, unused.
 @group(0) @binding(3) var<storage, read> materials: array<vec4<f32>>;
@@ -57,17 +57,16 @@ fn sphere_light_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
+    let px = pixel.px;
     var radiance = vec3<f32>(0.0);
-    if (!is_background(nt)) {
-        let p = textureLoad(gbuffer_position, px, 0).xyz;
-        let n = nt.xyz;
-        let albedo = materials[u32(nt.w)].rgb;
+    if (pixel.geometry) {
+        let p = pixel.p;
+        let n = pixel.n;
+        let albedo = materials[u32(pixel.normal_texel.w)].rgb;
         // One-sided surfaces (as Mitsuba's diffuse BSDF): a face seen from its
         // back gets no direct light.
         var irradiance = vec3<f32>(0.0);

@@ -1,13 +1,24 @@
-//! Depth-only shadow map from the light centre (Williams 1978) over the
-//! fitted frustum. [`MapDepth`] selects the surface stored: the first (every
-//! triangle casts), the second (front faces culled: Wang and Molnar 1994;
-//! Cournia 5.5) or the mid-point of the two (Woo 1992, which Cournia 5.5
-//! names as future work): both maps, then a full-screen pass averaging them.
+//! Depth-only shadow maps from a light point (Williams 1978), one layer per
+//! face of its [`LightProjection`]: the fitted frustum, or the cube faces
+//! that see geometry. [`MapDepth`] selects the surface stored: the first
+//! (every triangle casts), the second (front faces culled: Wang and Molnar
+//! 1994; Cournia 5.5) or the mid-point of the two (Woo 1992, which Cournia
+//! 5.5 names as future work): both maps, then a full-screen pass averaging
+//! them.
 
-use wgpu::util::DeviceExt;
+use std::sync::Arc;
 
+use crate::error::Result;
+use crate::frame::{Frame, FrameContext, Intermediate};
+use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool};
 use crate::gpu::{layout, PassTimestamps};
-use crate::light_frustum::LightFrustum;
+use crate::light_frustum::{LightFrustum, LightProjection};
+use crate::pass_cache::{CachedPass, PassKey};
+use crate::passes::shadow_test::ShadowMapSettings;
+
+/// The shadow map from the light centre, as the pass cache keeps it (pass 1
+/// of every method but `reference`; see [`centre_map`]).
+pub const CENTRE_MAP: CachedPass = CachedPass { name: "shadow_map", capacity: 3 };
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -25,23 +36,23 @@ pub enum MapDepth {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadowUniforms {
-    view_proj: [[f32; 4]; 4],
-    view: [[f32; 4]; 4],
-    depth: [f32; 4],
+    pub(crate) view_proj: [[f32; 4]; 4],
+    pub(crate) view: [[f32; 4]; 4],
+    pub(crate) depth: [f32; 4],
 }
 
 pub struct ShadowMapPass {
     first_depth: wgpu::RenderPipeline,
     second_depth: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    layout: Layout,
     midpoint: wgpu::RenderPipeline,
-    midpoint_layout: wgpu::BindGroupLayout,
+    midpoint_layout: Layout,
 }
 
 impl ShadowMapPass {
-    pub fn new(device: &wgpu::Device) -> Self {
-        let layout = layout::bind_group_layout(device, "shadow_map::layout", &[layout::uniform(0)]);
-        let module = crate::shaders::module(device, "shadow_map::shader", crate::shaders::shadow_map());
+    pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
+        let layout = pool.layout(device, "shadow_map::layout", &[layout::uniform(0)]);
+        let module = crate::shaders::module(device, "shadow_map::shader", crate::shaders::compose("passes/shadow_map.wgsl"));
         let pipeline_layout = layout::pipeline_layout(device, "shadow_map::pipeline_layout", &layout);
         let position_only = [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }];
         let pipeline = |label: &str, cull_mode: Option<wgpu::Face>| {
@@ -68,7 +79,7 @@ impl ShadowMapPass {
                 cache: None,
             })
         };
-        let midpoint_layout = layout::bind_group_layout(
+        let midpoint_layout = pool.layout(
             device,
             "shadow_map::midpoint_layout",
             &[layout::depth_texture(0), layout::depth_texture(1)],
@@ -109,82 +120,80 @@ impl ShadowMapPass {
         }
     }
 
-    pub fn create_map(device: &wgpu::Device, map_size: u32) -> wgpu::Texture {
-        layout::create_texture(
-            device,
+    /// A `map_size` depth map of `layers` layers (one per projection face) from the frame's pool.
+    pub fn create_map(ctx: &FrameContext<'_>, map_size: u32, layers: u32) -> PooledTexture {
+        ctx.light_texture(
             "shadow_map::depth",
-            (map_size, map_size),
+            map_size,
+            layers,
             FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
         )
     }
 
+    /// Renders the scene's depth into each layer of `map` whose projection
+    /// face sees geometry, as part of a named pass that may be made of
+    /// several wgpu passes: `(first, last)` say whether these maps open or
+    /// close it (`(true, true)`: the whole pass).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
-        device: &wgpu::Device,
+        ctx: &FrameContext<'_>,
         encoder: &mut wgpu::CommandEncoder,
-        map: &wgpu::Texture,
-        frustum: &LightFrustum,
+        map: &PooledTexture,
+        projection: &LightProjection,
         depth: MapDepth,
-        vertices: &wgpu::Buffer,
-        vertex_count: u32,
-        timestamps: Option<PassTimestamps<'_>>,
-    ) {
-        self.record_part(device, encoder, map, frustum, depth, (vertices, vertex_count), timestamps, (true, true));
-    }
-
-    /// [`Self::record`] as part of a named pass made of several wgpu passes:
-    /// `(first, last)` say whether this map opens or closes it.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_part(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        map: &wgpu::Texture,
-        frustum: &LightFrustum,
-        depth: MapDepth,
-        vertices: (&wgpu::Buffer, u32),
         timestamps: Option<PassTimestamps<'_>>,
         (first, last): (bool, bool),
     ) {
-        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("shadow_map::uniforms"),
-            contents: bytemuck::bytes_of(&shadow_uniforms(frustum)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bind_group = layout::bind_group(device, "shadow_map::bind_group", &self.layout, &[uniforms.as_entire_binding()]);
-        let draw = |encoder: &mut wgpu::CommandEncoder, target: &wgpu::Texture, pipeline, writes| {
-            let view = layout::view(target);
-            let mut pass = begin_depth_pass(encoder, &view, writes);
+        let faces: Vec<(u32, &LightFrustum)> = projection.active_layers().collect();
+        for (k, (layer, frustum)) in faces.iter().enumerate() {
+            let (first, last) = (first && k == 0, last && k + 1 == faces.len());
+            self.record_face(ctx, encoder, map, *layer, frustum, depth, timestamps, (first, last));
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn record_face(
+        &self,
+        ctx: &FrameContext<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        map: &PooledTexture,
+        layer: u32,
+        frustum: &LightFrustum,
+        depth: MapDepth,
+        timestamps: Option<PassTimestamps<'_>>,
+        (first, last): (bool, bool),
+    ) {
+        let uniforms = uniform_buffer(ctx, "shadow_map::uniforms", &shadow_uniforms(frustum));
+        let bind_group = ctx.pool.bind_group(ctx.device, "shadow_map::bind_group", &self.layout, &[Binding::Buffer(&uniforms)]);
+        let vertices = ctx.vertices();
+        let draw = |encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, pipeline, writes| {
+            let mut pass = begin_depth_pass(encoder, target, writes);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             pass.set_vertex_buffer(0, vertices.0.slice(..));
             pass.draw(0..vertices.1, 0..1);
         };
         let part = |first: bool, last: bool| timestamps.and_then(|t| t.render_part(first, last));
+        let target = &map.layer_views[layer as usize];
         match depth {
-            MapDepth::First => draw(encoder, map, &self.first_depth, part(first, last)),
-            MapDepth::Second => draw(encoder, map, &self.second_depth, part(first, last)),
+            MapDepth::First => draw(encoder, target, &self.first_depth, part(first, last)),
+            MapDepth::Second => draw(encoder, target, &self.second_depth, part(first, last)),
             MapDepth::Midpoint => {
+                let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
                 let size = (map.width(), map.height());
-                let near = Self::create_map(device, size.0);
-                let far = Self::create_map(device, size.0);
-                draw(encoder, &near, &self.first_depth, part(first, false));
-                draw(encoder, &far, &self.second_depth, None);
-                let bind_group = layout::bind_group(
-                    device,
+                let near = ctx.texture("shadow_map::first_depth", size, FORMAT, usage);
+                let far = ctx.texture("shadow_map::second_depth", size, FORMAT, usage);
+                draw(encoder, &near.view, &self.first_depth, part(first, false));
+                draw(encoder, &far.view, &self.second_depth, None);
+                let bind_group = ctx.pool.bind_group(
+                    ctx.device,
                     "shadow_map::midpoint_bind_group",
                     &self.midpoint_layout,
-                    &[
-                        wgpu::BindingResource::TextureView(&layout::view(&near)),
-                        wgpu::BindingResource::TextureView(&layout::view(&far)),
-                    ],
+                    &[Binding::Texture(&near), Binding::Texture(&far)],
                 );
-                let view = layout::view(map);
-                let mut pass = begin_depth_pass(encoder, &view, part(false, last));
+                let mut pass = begin_depth_pass(encoder, target, part(false, last));
                 pass.set_pipeline(&self.midpoint);
                 pass.set_bind_group(0, &bind_group, &[]);
                 pass.draw(0..3, 0..1);
@@ -212,6 +221,56 @@ fn begin_depth_pass<'e>(
     })
 }
 
+/// A pooled uniform buffer holding `value` (for raster passes, whose
+/// shaders do not branch on it: see `layout::parameters`).
+pub fn uniform_buffer<T: bytemuck::Pod>(ctx: &FrameContext<'_>, label: &str, value: &T) -> crate::gpu::pool::PooledBuffer {
+    let bytes = bytemuck::bytes_of(value);
+    let buffer = ctx.buffer(label, bytes.len() as u64, wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST);
+    ctx.queue.write_buffer(&buffer, 0, bytes);
+    buffer
+}
+
+/// Pass 1 of every method but `reference`: the shadow map from the light
+/// centre over the projection `settings.projection` asks for, storing the
+/// surface `settings.bias` asks for; reused from the pass cache when the
+/// geometry, the projection, the map size and the stored surface are
+/// unchanged. Returns the map and its projection. Sets the stats
+/// `shadow_maps_rendered`, `map_size`, `cube_map` (1 for cube faces) and
+/// `shadow_map_faces` (faces rendered), and the intermediate `shadow_map`
+/// (one image per layer).
+pub fn centre_map(frame: &mut Frame<'_>, settings: &ShadowMapSettings) -> Result<(PooledTexture, Arc<LightProjection>)> {
+    settings.check_limits(frame.ctx.max_texture_side())?;
+    let projection = frame.ctx.projection(settings.projection)?;
+    let map_depth = settings.bias.map_depth();
+    let key = centre_map_key(&frame.ctx, settings, &projection);
+    let mut rendered = 0;
+    let map = frame.cached(CENTRE_MAP.name, key, |frame| {
+        let map = ShadowMapPass::create_map(&frame.ctx, settings.map_size, projection.layers());
+        frame.pass(CENTRE_MAP.name, |ctx, encoder, ts| {
+            ctx.shared.shadow_map.record(ctx, encoder, &map, &projection, map_depth, ts, (true, true))
+        })?;
+        rendered = 1;
+        Ok(map)
+    })?;
+    frame.stat("shadow_maps_rendered", rendered);
+    frame.stat("map_size", settings.map_size as i64);
+    frame.stat("cube_map", i64::from(projection.is_cube()));
+    frame.stat("shadow_map_faces", projection.active_faces() as i64);
+    frame.intermediate(Intermediate::depth("shadow_map", &map.resource.texture, projection.far()));
+    Ok((map, projection))
+}
+
+/// The centre map's pass-cache key: it reads the geometry, the projection,
+/// the map's size and which surface it keeps.
+pub fn centre_map_key(ctx: &FrameContext<'_>, settings: &ShadowMapSettings, projection: &LightProjection) -> PassKey {
+    PassKey::new(CENTRE_MAP.name)
+        .bytes(&ctx.geometry)
+        .projection(projection)
+        .u32(settings.map_size)
+        .bytes(format!("{:?}", settings.bias.map_depth()).as_bytes())
+        .finish()
+}
+
 /// The light's view for passes that rasterise from it (shadow maps, volumes).
 pub fn shadow_uniforms(frustum: &LightFrustum) -> ShadowUniforms {
     ShadowUniforms {
@@ -228,14 +287,25 @@ pub struct LightSpaceUniform {
     pub view: [[f32; 4]; 4],
     pub window: [f32; 4],
     pub depth: [f32; 4],
+    pub faces: [u32; 4],
 }
 
 impl LightSpaceUniform {
-    pub fn new(frustum: &LightFrustum, map_size: u32) -> Self {
+    /// The shaders' view of `projection` for maps of `map_size` texels: a
+    /// frustum's view and window; for cube faces, the translation to the
+    /// light point (the shader rotates into each face) and the unit window.
+    pub fn new(projection: &LightProjection, map_size: u32) -> Self {
+        let face = &projection.faces[0];
+        let (view, layers) = if projection.is_cube() {
+            (glam::Mat4::from_translation(-projection.origin), 6.0)
+        } else {
+            (face.view, 1.0)
+        };
         Self {
-            view: super::mat4(frustum.view),
-            window: frustum.window.to_array(),
-            depth: [frustum.near, frustum.far, map_size as f32, 0.0],
+            view: super::mat4(view),
+            window: face.window.to_array(),
+            depth: [face.near, face.far, map_size as f32, layers],
+            faces: [projection.active, 0, 0, 0],
         }
     }
 }

@@ -1,15 +1,8 @@
+#import passes/light_view.wgsl
+
 // Depth-only shadow map from the light centre over the fitted frustum
 // (Williams 1978). Stores linear light-view depth / far, so that biases and
 // comparisons are in world units (light_frustum.rs).
-
-struct ShadowUniforms {
-    view_proj: mat4x4<f32>,
-    view: mat4x4<f32>,
-    // near, far, unused, unused
-    depth: vec4<f32>,
-};
-
-@group(0) @binding(0) var<uniform> shadow: ShadowUniforms;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,

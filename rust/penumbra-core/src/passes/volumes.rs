@@ -3,17 +3,17 @@
 //! from the light, both sides drawn, the nearest kept in a depth map with
 //! method-specific colour targets beside it.
 
-use wgpu::util::DeviceExt;
-
 use crate::error::{Error, Result};
+use crate::frame::FrameContext;
+use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool};
 use crate::gpu::{layout, PassTimestamps};
-use crate::light_frustum::LightFrustum;
-use crate::passes::shadow_map::{shadow_uniforms, ShadowMapPass, FORMAT};
+use crate::light_frustum::{LightFrustum, LightProjection};
+use crate::passes::shadow_map::{shadow_uniforms, uniform_buffer, ShadowMapPass, FORMAT};
 
 pub struct VolumePass {
     name: &'static str,
     pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    layout: Layout,
 }
 
 impl VolumePass {
@@ -23,13 +23,14 @@ impl VolumePass {
     /// one colour target per format.
     pub fn new<V>(
         device: &wgpu::Device,
+        pool: &ResourcePool,
         name: &'static str,
         source: String,
         (vs, fs): (&str, &str),
         attributes: &[wgpu::VertexAttribute],
         targets: &[wgpu::TextureFormat],
     ) -> Self {
-        let layout = layout::bind_group_layout(device, name, &[layout::uniform(0)]);
+        let layout = pool.layout(device, name, &[layout::uniform(0)]);
         let module = crate::shaders::module(device, name, source);
         let buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<V>() as u64,
@@ -52,63 +53,62 @@ impl VolumePass {
         Self { name, pipeline, layout }
     }
 
-    /// Records the pass into a new `map_size` depth map, which it returns;
-    /// the colour `targets` are cleared to zero first. `frustum` is the
-    /// light's; draws nothing for no vertices.
+    /// Records the pass into a new `map_size` depth map with a layer per
+    /// face of `projection`, which it returns; each active face's layer of
+    /// the colour `targets` (array textures of as many layers) is cleared to
+    /// zero first and drawn into. Draws nothing for no vertices.
     #[allow(clippy::too_many_arguments)]
     pub fn record<V: bytemuck::Pod>(
         &self,
-        device: &wgpu::Device,
+        ctx: &FrameContext<'_>,
         encoder: &mut wgpu::CommandEncoder,
-        frustum: &LightFrustum,
+        projection: &LightProjection,
         vertices: &[V],
         map_size: u32,
-        targets: &[&wgpu::Texture],
+        targets: &[&PooledTexture],
         timestamps: Option<PassTimestamps<'_>>,
-    ) -> Result<wgpu::Texture> {
+    ) -> Result<PooledTexture> {
         let count = u32::try_from(vertices.len()).map_err(|_| {
             Error::InvalidScene(format!("too many penumbra volumes for one draw: {} vertices, at most {}", vertices.len(), u32::MAX))
         })?;
-        let depth = ShadowMapPass::create_map(device, map_size);
-        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(self.name),
-            contents: bytemuck::bytes_of(&shadow_uniforms(frustum)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bind_group = layout::bind_group(device, self.name, &self.layout, &[uniforms.as_entire_binding()]);
+        let depth = ShadowMapPass::create_map(ctx, map_size, projection.layers());
         let buffer = (count > 0).then(|| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            let bytes: &[u8] = bytemuck::cast_slice(vertices);
+            let buffer = ctx.buffer(self.name, bytes.len() as u64, wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST);
+            ctx.queue.write_buffer(&buffer, 0, bytes);
+            buffer
+        });
+        let faces: Vec<(u32, &LightFrustum)> = projection.active_layers().collect();
+        for (k, (layer, frustum)) in faces.iter().enumerate() {
+            let layer = *layer as usize;
+            let uniforms = uniform_buffer(ctx, self.name, &shadow_uniforms(frustum));
+            let bind_group = ctx.pool.bind_group(ctx.device, self.name, &self.layout, &[Binding::Buffer(&uniforms)]);
+            let clear = wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store };
+            let attachments: Vec<_> = targets
+                .iter()
+                .map(|t| {
+                    Some(wgpu::RenderPassColorAttachment { view: &t.layer_views[layer], depth_slice: None, resolve_target: None, ops: clear })
+                })
+                .collect();
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(self.name),
-                contents: bytemuck::cast_slice(vertices),
-                usage: wgpu::BufferUsages::VERTEX,
-            })
-        });
-        let depth_view = layout::view(&depth);
-        let views: Vec<_> = targets.iter().map(|t| layout::view(t)).collect();
-        let clear = wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store };
-        let attachments: Vec<_> = views
-            .iter()
-            .map(|view| Some(wgpu::RenderPassColorAttachment { view, depth_slice: None, resolve_target: None, ops: clear }))
-            .collect();
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(self.name),
-            color_attachments: &attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timestamps.map(|t| t.render()),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        if let Some(buffer) = &buffer {
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.set_vertex_buffer(0, buffer.slice(..));
-            pass.draw(0..count, 0..1);
+                color_attachments: &attachments,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth.layer_views[layer],
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timestamps.and_then(|t| t.render_part(k == 0, k + 1 == faces.len())),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if let Some(buffer) = &buffer {
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.set_vertex_buffer(0, buffer.slice(..));
+                pass.draw(0..count, 0..1);
+            }
         }
-        drop(pass);
         Ok(depth)
     }
 }

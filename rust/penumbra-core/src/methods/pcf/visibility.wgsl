@@ -1,7 +1,10 @@
+#import shaders/receiver.wgsl
+#import passes/pcf_taps.wgsl
+
 // Method `pcf`: percentage-closer filtering with a fixed kernel (Reeves et
 // al. 1987; Cournia 3.4): the mean of the shadow-map tests over a square of
 // `kernel` texels around the receiver, from an n x n jittered grid of taps
-// (shaders/pcf.wgsl).
+// (passes/pcf_taps.wgsl).
 
 struct PcfKernel {
     // Kernel width in map texels.
@@ -13,9 +16,7 @@ struct PcfKernel {
     nearest: u32,
 };
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
 @group(0) @binding(4) var<storage, read> shadow_params: ShadowTest;
 @group(0) @binding(5) var<storage, read> pcf_params: PcfKernel;
@@ -50,15 +51,13 @@ fn pcf_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> f32 {
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     shadow = shadow_params;
     pcf = pcf_params;
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
     var v = 0.0;
-    if (!is_background(nt)) {
-        v = pcf_visibility(id.xy, textureLoad(gbuffer_position, px, 0).xyz, nt.xyz);
+    if (pixel.geometry) {
+        v = pcf_visibility(id.xy, pixel.p, pixel.n);
     }
-    textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));
+    textureStore(visibility_out, pixel.px, vec4<f32>(v, 0.0, 0.0, 0.0));
 }

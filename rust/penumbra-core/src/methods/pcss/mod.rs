@@ -7,25 +7,24 @@
 //! near plane), averaging the raw depths nearer than the receiver's plane;
 //! no blocker means fully lit (the paper's early exit); otherwise the
 //! penumbra width `w_p = (d_r - d_b) w_light / d_b` sets the diameter of a
-//! percentage-closer filter (`shaders/pcf.wgsl` taps). Taps are disk
+//! percentage-closer filter (`passes/pcf_taps.wgsl` taps). Taps are disk
 //! samples, since the light seen from a receiver is a disk: `sampling` =
 //! `grid` is a jittered n x n grid through Shirley and Chiu's concentric map,
 //! `poisson` the first n x n points of a fixed 64-point Poisson-disk set
 //! (so n <= 8); both rotated per pixel by an angle fixed by `seed`. A point
 //! light (radius 0) skips the search: the test of `hard`.
 
-use std::collections::BTreeMap;
-
-use wgpu::util::DeviceExt;
-
 use crate::error::{Error, Result};
-use crate::gpu::{layout, PassTimestamps};
-use crate::light_frustum::LightFrustum;
-use crate::methods::hard::ShadowMapSettings;
-use crate::methods::pcf::{ComparisonSamplers, Filter};
-use crate::methods::{ParamReader, ParamValue};
-use crate::passes::gbuffer::GBuffer;
-use crate::passes::shading::{ShadingPass, VISIBILITY_FORMAT};
+use crate::frame::{Frame, Intermediate};
+use crate::gpu::layout;
+use crate::gpu::pool::{Binding, ResourcePool};
+use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
+use crate::pass_cache::CachedPass;
+use crate::passes::samplers::Filter;
+use crate::passes::screen::ScreenPass;
+use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::shadow_test::ShadowMapSettings;
 
 /// Points in the Poisson-disk set of `methods/pcss/visibility.wgsl`.
 pub const POISSON_POINTS: u32 = 64;
@@ -38,13 +37,6 @@ pub enum Sampling {
 
 impl Sampling {
     const NAMES: [&'static str; 2] = ["grid", "poisson"];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Sampling::Grid => "grid",
-            Sampling::Poisson => "poisson",
-        }
-    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -59,18 +51,49 @@ pub struct PcssParams {
     pub sampling: Sampling,
 }
 
-impl PcssParams {
-    pub fn read(r: &mut ParamReader<'_>) -> Result<Self> {
-        let params = Self {
-            shadow: ShadowMapSettings::read(r)?,
-            blocker_samples: r.int("blocker_samples", 4, 1, 32)? as u32,
-            filter_samples: r.int("filter_samples", 6, 1, 32)? as u32,
-            seed: r.int("seed", 0, 0, u32::MAX as i64)? as u32,
-            filter: Filter::read(r)?,
-            sampling: match r.choice("sampling", "grid", &Sampling::NAMES)? {
-                "poisson" => Sampling::Poisson,
-                _ => Sampling::Grid,
-            },
+/// Layout of `PcssSampling` in `methods/pcss/visibility.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PcssUniform {
+    pub(crate) blocker_samples: u32,
+    pub(crate) filter_samples: u32,
+    pub(crate) seed: u32,
+    pub(crate) poisson: u32,
+}
+
+/// Names of the pass's counters, in order: pixels that ran the blocker
+/// search, pixels that ran the filter.
+pub const COUNTER_NAMES: &[&str] = &["blocker_search_pixels", "filtered_pixels"];
+
+pub struct PercentageCloserSoftShadows {
+    visibility: ScreenPass,
+}
+
+impl Method for PercentageCloserSoftShadows {
+    const NAME: &'static str = "pcss";
+    const PAPER: &'static str = "percentage-closer soft shadows (Fernando 2005): blocker search, penumbra estimate, variable PCF";
+    type Params = PcssParams;
+
+    fn specs() -> Vec<ParamSpec> {
+        let mut specs = ShadowMapSettings::specs("slope");
+        specs.extend([
+            ParamSpec::int("blocker_samples", 4, 1, 32, "taps per axis of the blocker search (at most 8 with 'poisson')"),
+            ParamSpec::int("filter_samples", 6, 1, 32, "taps per axis of the filter (at most 8 with 'poisson')"),
+            ParamSpec::int("seed", 0, 0, u32::MAX as i64, "fixes the taps' rotation and jitter"),
+            Filter::spec(),
+            ParamSpec::choice("sampling", "grid", &Sampling::NAMES, "disk taps: a jittered grid, or a fixed Poisson-disk set"),
+        ]);
+        specs
+    }
+
+    fn params(p: &ParamSet) -> Result<PcssParams> {
+        let params = PcssParams {
+            shadow: ShadowMapSettings::from_params(p),
+            blocker_samples: p.int("blocker_samples") as u32,
+            filter_samples: p.int("filter_samples") as u32,
+            seed: p.int("seed") as u32,
+            filter: Filter::from_params(p),
+            sampling: if p.choice("sampling") == "poisson" { Sampling::Poisson } else { Sampling::Grid },
         };
         if params.sampling == Sampling::Poisson {
             for (name, n) in [("blocker_samples", params.blocker_samples), ("filter_samples", params.filter_samples)] {
@@ -85,126 +108,77 @@ impl PcssParams {
         Ok(params)
     }
 
-    pub fn effective(&self) -> BTreeMap<String, ParamValue> {
-        let mut out = self.shadow.effective();
-        out.insert("blocker_samples".into(), ParamValue::Int(self.blocker_samples as i64));
-        out.insert("filter_samples".into(), ParamValue::Int(self.filter_samples as i64));
-        out.insert("seed".into(), ParamValue::Int(self.seed as i64));
-        out.insert("filter".into(), ParamValue::Str(self.filter.name().into()));
-        out.insert("sampling".into(), ParamValue::Str(self.sampling.name().into()));
-        out
-    }
-}
-
-/// Uniform layout of `PcssSampling` in `methods/pcss/visibility.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct PcssUniform {
-    blocker_samples: u32,
-    filter_samples: u32,
-    seed: u32,
-    poisson: u32,
-}
-
-/// What one render's pass leaves behind: the intermediates and the counters.
-pub struct PcssFrame {
-    /// Estimated penumbra width in map texels (camera space, 0 where unfiltered).
-    pub penumbra_width: wgpu::Texture,
-    /// Mean blocker depth in world units (camera space, 0 where none).
-    pub blocker_depth: wgpu::Texture,
-    /// Two u32: pixels that ran the blocker search, pixels that ran the filter.
-    pub counters: wgpu::Buffer,
-}
-
-/// Names of the counters in [`PcssFrame::counters`], in order.
-pub const COUNTER_NAMES: &[&str] = &["blocker_search_pixels", "filtered_pixels"];
-
-pub struct PercentageCloserSoftShadows {
-    pipeline: wgpu::ComputePipeline,
-    layout: wgpu::BindGroupLayout,
-}
-
-impl PercentageCloserSoftShadows {
-    pub fn new(device: &wgpu::Device) -> Self {
-        let layout = layout::bind_group_layout(
-            device,
-            "pcss::layout",
-            &[
-                layout::float_texture(0),
-                layout::float_texture(1),
-                layout::depth_texture(2),
-                layout::comparison_sampler(3),
-                layout::parameters(4),
-                layout::parameters(5),
-                layout::storage_texture(6, VISIBILITY_FORMAT),
-                layout::storage_texture(7, VISIBILITY_FORMAT),
-                layout::storage_texture(8, VISIBILITY_FORMAT),
-                layout::storage_buffer_rw(9),
-            ],
-        );
-        let pipeline = layout::compute_pipeline(device, "pcss::visibility_pipeline", crate::shaders::pcss(), &layout);
-        Self { pipeline, layout }
+    fn cached_passes() -> &'static [CachedPass] {
+        &[CENTRE_MAP]
     }
 
-    /// Records the visibility pass: blocker search, penumbra estimate and
-    /// filter per G-buffer pixel.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_visibility(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        params: &PcssParams,
-        samplers: &ComparisonSamplers,
-        gbuffer: &GBuffer,
-        shadow_map: &wgpu::Texture,
-        frustum: &LightFrustum,
-        light: ([f32; 3], f32),
-        visibility: &wgpu::Texture,
-        timestamps: Option<PassTimestamps<'_>>,
-    ) -> PcssFrame {
-        let frame = PcssFrame {
-            penumbra_width: ShadingPass::create_visibility(device, gbuffer.size),
-            blocker_depth: ShadingPass::create_visibility(device, gbuffer.size),
-            counters: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("pcss::counters"),
-                contents: &[0u8; 8],
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            }),
-        };
-        let test = layout::parameter_buffer(device, "pcss::shadow_test_uniforms", &params.shadow.uniform(frustum, light.0, light.1, 0));
-        let sampling = PcssUniform {
-            blocker_samples: params.blocker_samples,
-            filter_samples: params.filter_samples,
-            seed: params.seed,
-            poisson: u32::from(params.sampling == Sampling::Poisson),
-        };
-        let sampling = layout::parameter_buffer(device, "pcss::sampling_uniforms", &sampling);
-        let views = [shadow_map, visibility, &frame.penumbra_width, &frame.blocker_depth].map(layout::view);
-        let bind_group = layout::bind_group(
+    fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
+        let visibility = ScreenPass::new(
             device,
-            "pcss::bind_group",
-            &self.layout,
+            pool,
+            "pcss::visibility_pass",
+            crate::shaders::compose("methods/pcss/visibility.wgsl"),
             &[
-                wgpu::BindingResource::TextureView(&gbuffer.position_view),
-                wgpu::BindingResource::TextureView(&gbuffer.normal_view),
-                wgpu::BindingResource::TextureView(&views[0]),
-                wgpu::BindingResource::Sampler(samplers.get(params.filter)),
-                test.as_entire_binding(),
-                sampling.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&views[1]),
-                wgpu::BindingResource::TextureView(&views[2]),
-                wgpu::BindingResource::TextureView(&views[3]),
-                frame.counters.as_entire_binding(),
+                layout::depth_array,
+                layout::comparison_sampler,
+                layout::parameters,
+                layout::parameters,
+                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                layout::storage_buffer_rw,
             ],
+            &["main"],
         );
-        layout::dispatch_per_pixel(encoder, "pcss::visibility_pass", &self.pipeline, &bind_group, gbuffer.size, timestamps);
-        frame
+        Self { visibility }
+    }
+
+    /// Blocker search, penumbra estimate and filter per G-buffer pixel.
+    fn record(&self, frame: &mut Frame<'_>, params: &PcssParams) -> Result<MethodOutput> {
+        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let visibility = frame.ctx.screen_texture("pcss::visibility");
+        // Estimated penumbra width in map texels and mean blocker depth in
+        // world units (camera space, 0 where not computed).
+        let penumbra_width = frame.ctx.screen_texture("pcss::penumbra_width");
+        let blocker_depth = frame.ctx.screen_texture("pcss::blocker_depth");
+        let counters = frame.pass("visibility", |ctx, encoder, ts| {
+            let counters = ctx.counters("pcss::counters", COUNTER_NAMES.len(), encoder);
+            let test = ctx.parameters(
+                "pcss::shadow_test_uniforms",
+                &params.shadow.uniform(&projection, ctx.light.center_f32, ctx.light.radius_f32, 0),
+            );
+            let sampling = PcssUniform {
+                blocker_samples: params.blocker_samples,
+                filter_samples: params.filter_samples,
+                seed: params.seed,
+                poisson: u32::from(params.sampling == Sampling::Poisson),
+            };
+            let sampling = ctx.parameters("pcss::sampling_uniforms", &sampling);
+            let resources = [
+                Binding::Texture(&map),
+                ctx.shared.samplers.binding(params.filter),
+                Binding::Buffer(&test),
+                Binding::Buffer(&sampling),
+                Binding::Texture(&visibility),
+                Binding::Texture(&penumbra_width),
+                Binding::Texture(&blocker_depth),
+                Binding::Buffer(&counters),
+            ];
+            self.visibility.run(ctx, encoder, &resources, ts);
+            counters
+        })?;
+        frame.counters(&counters, COUNTER_NAMES);
+        frame.intermediate(Intermediate::color("pcss_penumbra_width", &penumbra_width, 1));
+        frame.intermediate(Intermediate::color("pcss_blocker_depth", &blocker_depth, 1));
+        Ok(MethodOutput { visibility })
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::methods::ParamValue;
+    use std::collections::BTreeMap;
 
     /// The Poisson-disk set as the shader holds it.
     fn poisson_disk() -> Vec<[f32; 2]> {
@@ -244,11 +218,10 @@ mod tests {
         let mut params = BTreeMap::new();
         params.insert("sampling".to_string(), ParamValue::Str("poisson".into()));
         params.insert("filter_samples".to_string(), ParamValue::Int(9));
-        let mut reader = ParamReader::new("pcss", &params);
-        let err = PcssParams::read(&mut reader).unwrap_err().to_string();
+        let err = crate::methods::MethodConfig::parse("pcss", &params).unwrap_err().to_string();
         assert!(err.contains("filter_samples") && err.contains("at most 8"), "{err}");
         params.insert("filter_samples".to_string(), ParamValue::Int(8));
-        let mut reader = ParamReader::new("pcss", &params);
-        assert_eq!(PcssParams::read(&mut reader).unwrap().filter_samples, 8);
+        let set = ParamSet::parse("pcss", &PercentageCloserSoftShadows::specs(), &params).unwrap();
+        assert_eq!(PercentageCloserSoftShadows::params(&set).unwrap().filter_samples, 8);
     }
 }

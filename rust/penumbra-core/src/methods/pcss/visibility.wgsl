@@ -1,10 +1,13 @@
+#import shaders/receiver.wgsl
+#import passes/pcf_taps.wgsl
+
 // Method `pcss`: percentage-closer soft shadows (Fernando 2005; surveyed in
 // Cournia ch. 3, and the basis of PVMF's filter, 5.2). Per pixel:
 //   1. blocker search: the mean light depth d_b of the map texels, in a region
 //      around the receiver, that are nearer the light than the receiver's plane;
 //      no blocker found: fully lit (the paper's early exit);
 //   2. penumbra estimate: w_p = (d_r - d_b) w_light / d_b (parallel planes);
-//   3. percentage-closer filtering over a disk of that width (shaders/pcf.wgsl).
+//   3. percentage-closer filtering over a disk of that width (passes/pcf_taps.wgsl).
 // Sizes are in map texels. Taps are disk samples (the light is a disk as seen
 // from the receiver): a jittered n x n grid through Shirley and Chiu's map, or
 // the first n x n points of a fixed Poisson-disk set; both rotated per pixel.
@@ -26,9 +29,7 @@ struct PcssPixel {
     blocker: f32,
 };
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
 // center.w: the light's radius.
 @group(0) @binding(4) var<storage, read> shadow_params: ShadowTest;
@@ -82,11 +83,32 @@ fn disk_tap(px: vec2<u32>, i: u32, n: u32, stream: u32, rot: vec2<f32>) -> vec2<
     return vec2<f32>(rot.x * s.x - rot.y * s.y, rot.y * s.x + rot.x * s.y);
 }
 
-// World-unit light depth stored in the map at the texel under `c` (no comparison).
-fn texel_depth(c: vec2<f32>) -> f32 {
-    let size = vec2<i32>(textureDimensions(shadow_map));
-    let t = clamp(vec2<i32>(floor(c)), vec2<i32>(0), size - 1);
-    return textureLoad(shadow_map, t, 0) * shadow.light_space.depth.y;
+// The blocker test's two depths for the texel under `c` (coordinates in the
+// receiver's layer; on a cube, beyond its edges they read the neighbour
+// face), both along the receiver layer's axis in world units: x, the
+// surface the map stores there; y, the receiver's plane along the ray
+// through that texel's centre (the ray the map sampled: along the tap's own
+// ray the plane would differ by its slope across the texel, and a plane seen
+// at a grazing angle would then find itself a blocker). A texel where
+// nothing was drawn (the far plane: beyond every surface) holds no blocker,
+// even where the ray passes above the receiver's plane's horizon.
+fn texel_blocker(r: Receiver, c: vec2<f32>) -> vec2<f32> {
+    let ls = shadow.light_space;
+    let m = map_wrap(ls, r.layer, c);
+    let centre = vec2<f32>(map_texel(textureDimensions(shadow_map), m)) + 0.5;
+    let stored = map_point_depth(ls, shadow_map, MapPoint(m.layer, centre));
+    if (stored >= ls.depth.y) {
+        return vec2<f32>(1.0, 0.0);
+    }
+    // The texel centre in the receiver's layer's coordinates.
+    var at = centre;
+    if (m.layer != r.layer) {
+        at = view_coords(ls, layer_frame(ls, r.layer, light_ray(ls, m.layer, centre)));
+    }
+    // The read layer's depth per unit depth along the receiver layer's axis
+    // is positive: the direction's dominant axis is the read face's.
+    let z = stored / layer_depth_scale(ls, r.layer, at, m.layer);
+    return vec2<f32>(z, plane_depth(shadow, r, at));
 }
 
 fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
@@ -120,9 +142,9 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
     var blockers = 0u;
     for (var i = 0u; i < nb * nb; i++) {
         let c = r.coords + search * disk_tap(px, i, nb, BLOCKER_STREAM, rot);
-        let z = texel_depth(c);
-        if (z < plane_depth(shadow, r, c) - r.bias) {
-            blocker_sum += z;
+        let b = texel_blocker(r, c);
+        if (b.x < b.y - r.bias) {
+            blocker_sum += b.x;
             blockers += 1u;
         }
     }
@@ -160,15 +182,14 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     shadow = shadow_params;
     pcss = pcss_params;
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
+    let px = pixel.px;
     var o = PcssPixel(0.0, 0.0, 0.0);
-    if (!is_background(nt)) {
-        o = pcss_visibility(id.xy, textureLoad(gbuffer_position, px, 0).xyz, nt.xyz);
+    if (pixel.geometry) {
+        o = pcss_visibility(id.xy, pixel.p, pixel.n);
     }
     textureStore(visibility_out, px, vec4<f32>(o.v, 0.0, 0.0, 0.0));
     textureStore(width_out, px, vec4<f32>(o.width, 0.0, 0.0, 0.0));

@@ -15,21 +15,23 @@
 //! in a sliver rather than a shared extrusion vector: never NaN, at most a
 //! thin gap where the shadow-map test takes over. `stats` counts such vertices.
 
-use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use glam::DVec3;
-use wgpu::util::DeviceExt;
 
 use crate::error::Result;
-use crate::gpu::{layout, PassTimestamps};
-use crate::light_frustum::LightFrustum;
-use crate::methods::hard::ShadowMapSettings;
-use crate::methods::{ParamReader, ParamValue};
-use crate::passes::gbuffer::GBuffer;
+use crate::frame::{Frame, FrameContext, Intermediate};
+use crate::gpu::layout;
+use crate::gpu::pool::{Binding, Layout, PooledBuffer, PooledTexture, ResourcePool};
+use crate::light_frustum::LightProjection;
+use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
+use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::passes::screen::ScreenPass;
+use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::shadow_test::ShadowMapSettings;
 use crate::passes::volumes::VolumePass;
-use crate::scene::PreparedScene;
-use crate::pass_cache::PassKey;
+use crate::silhouettes::SceneSilhouette;
 pub use crate::silhouettes::{silhouette, OpenEdges, Repairs, SilhouetteCache, SilhouetteEdge};
 
 pub mod geometry;
@@ -41,6 +43,13 @@ pub const EDGE_INDEX_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The `pvm_edge0` / `pvm_edge1` intermediates: the paper's edge maps.
 pub const EDGE_POINT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
+/// The values of `repairs`: cumulative, in the order docs/real_meshes.md
+/// measures them; "all" (the default) adds the horizon to the last.
+pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "cone", "cone+hidden", "cone+hidden+centre"];
+
+/// The penumbra volume map (pass 2), as the pass cache keeps it.
+pub const PENUMBRA_VOLUMES: CachedPass = CachedPass { name: "penumbra_volumes", capacity: 1 };
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct PvmParams {
     pub shadow: ShadowMapSettings,
@@ -51,238 +60,235 @@ pub struct PvmParams {
     pub repairs: Repairs,
 }
 
-/// The values of `repairs`: cumulative, in the order docs/real_meshes.md
-/// measures them; "all" (the default) adds the horizon to the last.
-pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "cone", "cone+hidden", "cone+hidden+centre"];
-
-impl PvmParams {
-    pub fn read(r: &mut ParamReader<'_>) -> Result<Self> {
-        Ok(Self {
-            shadow: ShadowMapSettings::read(r)?,
-            falloff: r.bool("falloff", true)?,
-            open_edges: OpenEdges::parse(r.choice("open_edges", "silhouette", &OpenEdges::NAMES)?),
-            repairs: Repairs::parse(r.choice("repairs", "all", &REPAIR_LEVELS)?),
-        })
-    }
-
-    pub fn effective(&self) -> BTreeMap<String, ParamValue> {
-        let mut out = self.shadow.effective();
-        out.insert("falloff".into(), ParamValue::Bool(self.falloff));
-        out.insert("open_edges".into(), ParamValue::Str(self.open_edges.name().into()));
-        out.insert("repairs".into(), ParamValue::Str(self.repairs_name().into()));
-        out
-    }
-
-    fn repairs_name(&self) -> &'static str {
-        REPAIR_LEVELS.iter().copied().find(|&n| Repairs::parse(n) == self.repairs).unwrap_or("all")
-    }
-}
-
-pub struct PenumbraVolumeMaps {
-    volume_pass: VolumePass,
-    visibility_pipeline: wgpu::ComputePipeline,
-    visibility_layout: wgpu::BindGroupLayout,
-    edge_maps_pipeline: wgpu::ComputePipeline,
-    edge_maps_layout: wgpu::BindGroupLayout,
-}
-
-/// The penumbra volume map (pass 2): what the renderer's pass cache keeps.
+/// The penumbra volume map (pass 2).
 pub struct PvmVolumes {
-    pub volume_depth: wgpu::Texture,
+    pub volume_depth: PooledTexture,
     /// Per texel, the index + 1 into `edges` of the volume nearest the light (0: none).
-    pub edge_index: wgpu::Texture,
+    pub edge_index: PooledTexture,
     /// The silhouette edges' end points ([`EdgePoints`]; one zeroed entry when there is none).
-    pub edges: wgpu::Buffer,
+    pub edges: PooledBuffer,
     pub stats: VolumeStats,
+    /// Meshes whose silhouettes came from the silhouette cache.
+    pub silhouette_cache_hits: usize,
 }
 
-/// What one PVM render produced besides visibility: the volume map (built
-/// now or reused), this frame's membership image and counter, and, when
-/// intermediates are asked for, the paper's two edge maps.
-pub struct PvmFrame {
-    pub volumes: std::sync::Arc<PvmVolumes>,
-    pub membership: wgpu::Texture,
-    pub counter: wgpu::Buffer,
-    /// `pvm_edge0` and `pvm_edge1` ([`PenumbraVolumeMaps::record_edge_maps`]).
-    pub edge_maps: Option<(wgpu::Texture, wgpu::Texture)>,
-}
-
-/// What pass 2 reads besides the geometry: the light, the frustum, the map
-/// size, `open_edges` and the geometric repairs (appended to the pass-cache key).
-pub fn volumes_key(params: &PvmParams, frustum: &LightFrustum, (l, r): (DVec3, f64), key: &mut PassKey) {
+/// What pass 2 reads besides the geometry: the light, the projection, the
+/// map size, `open_edges` and the geometric repairs (appended to the pass-cache key).
+pub fn volumes_key(params: &PvmParams, projection: &LightProjection, (l, r): (DVec3, f64), key: &mut PassKey) {
     key.f64s(&l.to_array())
         .f64s(&[r])
         .bytes(params.open_edges.name().as_bytes())
         .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden)])
-        .frustum(frustum)
+        .projection(projection)
         .u32(params.shadow.map_size);
 }
 
-impl PvmFrame {
-    pub fn new(device: &wgpu::Device, volumes: std::sync::Arc<PvmVolumes>, size: (u32, u32)) -> Self {
-        let membership = crate::passes::shading::ShadingPass::create_visibility(device, size);
-        let counter = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvm::pixels_in_volume"),
-            contents: &[0u8; 4],
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
-        Self { volumes, membership, counter, edge_maps: None }
+pub struct PenumbraVolumeMaps {
+    volume_pass: VolumePass,
+    visibility: ScreenPass,
+    edge_maps_pipeline: wgpu::ComputePipeline,
+    edge_maps_layout: Layout,
+}
+
+/// A write-only storage binding of a light-space array image (compute).
+fn storage_array(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+        },
+        count: None,
     }
 }
 
+/// A light-space image of edge indices (`texture_2d_array<u32>`).
+fn uint_array(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    layout::array_texture(binding, wgpu::TextureSampleType::Uint)
+}
 
-impl PenumbraVolumeMaps {
-    pub fn new(device: &wgpu::Device) -> Self {
+impl Method for PenumbraVolumeMaps {
+    const NAME: &'static str = "pvm";
+    const PAPER: &'static str = "penumbra volume maps (Cournia ch. 4)";
+    type Params = PvmParams;
+
+    fn specs() -> Vec<ParamSpec> {
+        let mut specs = ShadowMapSettings::specs("slope");
+        specs.extend([
+            ParamSpec::bool("falloff", true, "the 3k^2 - 2k^3 interpolant of 4.2 (false: the disk fraction k)"),
+            ParamSpec::choice(
+                "open_edges",
+                "silhouette",
+                &OpenEdges::NAMES,
+                "edges that are not two-sided (open and non-manifold meshes): silhouette edges where all their faces lie on one side of the plane through them and the light, or refuse such meshes",
+            ),
+            ParamSpec::choice(
+                "repairs",
+                "all",
+                &REPAIR_LEVELS,
+                "departures from the paper for real meshes, cumulative (docs/real_meshes.md): none, cone, cone+hidden, cone+hidden+centre, all (+horizon)",
+            ),
+        ]);
+        specs
+    }
+
+    fn params(p: &ParamSet) -> Result<PvmParams> {
+        Ok(PvmParams {
+            shadow: ShadowMapSettings::from_params(p),
+            falloff: p.bool("falloff"),
+            open_edges: OpenEdges::parse(p.choice("open_edges")),
+            repairs: Repairs::parse(p.choice("repairs")),
+        })
+    }
+
+    fn cached_passes() -> &'static [CachedPass] {
+        &[CENTRE_MAP, PENUMBRA_VOLUMES]
+    }
+
+    fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         let volume_pass = VolumePass::new::<VolumeVertex>(
             device,
+            pool,
             "pvm::volume_pass",
-            crate::shaders::pvm_volumes(),
+            crate::shaders::compose("methods/pvm/volumes.wgsl"),
             ("vs_main", "fs_main"),
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
             &[EDGE_INDEX_FORMAT],
         );
-        let visibility_layout = layout::bind_group_layout(
+        let visibility = ScreenPass::new(
             device,
-            "pvm::visibility_layout",
+            pool,
+            "pvm::visibility_pass",
+            crate::shaders::compose("methods/pvm/visibility.wgsl"),
             &[
-                layout::float_texture(0),
-                layout::float_texture(1),
-                layout::depth_texture(2),
-                layout::depth_texture(3),
-                layout::texture(4, wgpu::TextureSampleType::Uint),
-                layout::parameters(5),
-                layout::parameters(6),
-                layout::storage_texture(7, VISIBILITY_FORMAT),
-                layout::storage_texture(8, VISIBILITY_FORMAT),
-                layout::storage_buffer_rw(9),
+                layout::depth_array,
+                layout::depth_array,
+                uint_array,
+                layout::parameters,
+                layout::parameters,
+                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                layout::storage_buffer_rw,
             ],
+            &["main"],
         );
-        let visibility_pipeline = layout::compute_pipeline(device, "pvm::visibility_pipeline", crate::shaders::pvm(), &visibility_layout);
-        let edge_maps_layout = layout::bind_group_layout(
+        let edge_maps_layout = pool.layout(
             device,
             "pvm::edge_maps_layout",
-            &[
-                layout::texture(0, wgpu::TextureSampleType::Uint),
-                layout::parameters(1),
-                layout::storage_texture(2, EDGE_POINT_FORMAT),
-                layout::storage_texture(3, EDGE_POINT_FORMAT),
-            ],
+            &[uint_array(0), layout::parameters(1), storage_array(2, EDGE_POINT_FORMAT), storage_array(3, EDGE_POINT_FORMAT)],
         );
-        let edge_maps_pipeline = layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shaders::pvm_edge_maps(), &edge_maps_layout);
-        Self {
-            volume_pass,
-            visibility_pipeline,
-            visibility_layout,
-            edge_maps_pipeline,
-            edge_maps_layout,
-        }
+        let edge_maps_pipeline =
+            layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shaders::compose("methods/pvm/edge_maps.wgsl"), &edge_maps_layout);
+        Self { volume_pass, visibility, edge_maps_pipeline, edge_maps_layout }
     }
 
-    /// Pass 2: builds and renders the penumbra volume map; also returns the
-    /// silhouette cache hits. It reads the geometry, the frustum, the light,
-    /// `map_size` and `open_edges` (the renderer's pass-cache key).
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_volumes(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        params: &PvmParams,
-        silhouettes: &SilhouetteCache,
-        scene: &PreparedScene,
-        frustum: &LightFrustum,
-        light: (DVec3, f64),
-        timestamps: Option<PassTimestamps<'_>>,
-    ) -> Result<(PvmVolumes, usize)> {
-        let (l, r) = light;
-        let map = params.shadow.map_size;
-        let (mut cache_hits, mut geometry) = (0, VolumeGeometry::default());
-        // A point light has no penumbra: skip the volumes entirely.
-        if r > 0.0 {
-            let silhouette = if params.repairs.hidden {
-                silhouettes.seen_from_light(scene, l, params.open_edges)?
-            } else {
-                let (edges, cache_hits) = silhouettes.edges(scene, l, params.open_edges)?;
-                crate::silhouettes::SceneSilhouette { edges, cache_hits, hidden_edges: 0 }
-            };
-            cache_hits = silhouette.cache_hits;
-            let reach = 4.0 * frustum.far as f64 + 4.0 * r;
-            geometry = penumbra_volumes(&silhouette.edges, l, r, reach, params.repairs.cone);
-            geometry.stats.hidden_edges = silhouette.hidden_edges;
-            geometry.stats.silhouette_edges += silhouette.hidden_edges;
+    fn record(&self, frame: &mut Frame<'_>, params: &PvmParams) -> Result<MethodOutput> {
+        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let light = frame.ctx.light;
+        let (l, r) = (light.center, light.radius);
+        let mut key = PassKey::new(PENUMBRA_VOLUMES.name);
+        key.bytes(&frame.ctx.geometry);
+        volumes_key(params, &projection, (l, r), &mut key);
+        let mut fresh = false;
+        let volumes = frame.cached(PENUMBRA_VOLUMES.name, key.finish(), |frame| {
+            fresh = true;
+            self.record_volumes(frame, params, &projection).map(Arc::new)
+        })?;
+        let visibility = frame.ctx.screen_texture("pvm::visibility");
+        let membership = frame.ctx.screen_texture("pvm::in_volume");
+        let counter = frame.pass("visibility", |ctx, encoder, ts| {
+            let counter = ctx.counters("pvm::pixels_in_volume", 1, encoder);
+            let flags = u32::from(params.falloff) | (u32::from(params.repairs.centre) << 1) | (u32::from(params.repairs.horizon) << 2);
+            let uniforms = ctx.parameters(
+                "pvm::visibility_uniforms",
+                &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags),
+            );
+            let resources = [
+                Binding::Texture(&map),
+                Binding::Texture(&volumes.volume_depth),
+                Binding::Texture(&volumes.edge_index),
+                Binding::Buffer(&volumes.edges),
+                Binding::Buffer(&uniforms),
+                Binding::Texture(&visibility),
+                Binding::Texture(&membership),
+                Binding::Buffer(&counter),
+            ];
+            self.visibility.run(ctx, encoder, &resources, ts);
+            counter
+        })?;
+        let s = &volumes.stats;
+        frame.stat("silhouette_edges", s.silhouette_edges as i64);
+        frame.stat("penumbra_volumes", s.volume_quads as i64);
+        frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
+        frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
+        frame.stat("hidden_silhouette_edges", s.hidden_edges as i64);
+        frame.stat("extrusions_outside_light_cone", s.extrusions_outside_cone as i64);
+        frame.stat("silhouette_cache_hits", if fresh { volumes.silhouette_cache_hits as i64 } else { 0 });
+        frame.counters(&counter, &["pixels_in_volume"]);
+        frame.intermediate(Intermediate::depth("pvm_volume_depth", &volumes.volume_depth, projection.far()));
+        if frame.wants_intermediates() {
+            let (edge0, edge1) = frame.untimed(|ctx, encoder| self.record_edge_maps(ctx, encoder, &volumes, params.shadow.map_size));
+            frame.intermediate(Intermediate::color("pvm_edge0", &edge0, 3));
+            frame.intermediate(Intermediate::color("pvm_edge1", &edge1, 3));
         }
+        frame.intermediate(Intermediate::color("pvm_in_volume", &membership, 1));
+        Ok(MethodOutput { visibility })
+    }
+}
+
+impl PenumbraVolumeMaps {
+    /// Pass 2: builds the penumbra volumes of every silhouette edge (4.1.2)
+    /// and renders them into the penumbra volume map (4.1.3).
+    fn record_volumes(&self, frame: &mut Frame<'_>, params: &PvmParams, projection: &LightProjection) -> Result<PvmVolumes> {
+        let map = params.shadow.map_size;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-        let edge_index = layout::create_texture(device, "pvm::edge_index_map", (map, map), EDGE_INDEX_FORMAT, usage);
-        // A storage binding may not be empty: one zeroed entry stands for no edges.
-        let points = if geometry.edges.is_empty() { vec![EdgePoints { h0: [0.0; 4], h1: [0.0; 4] }] } else { geometry.edges };
-        let edges = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pvm::edges"),
-            contents: bytemuck::cast_slice(&points),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let volume_depth = self.volume_pass.record(device, encoder, frustum, &geometry.vertices, map, &[&edge_index], timestamps)?;
-        Ok((PvmVolumes { volume_depth, edge_index, edges, stats: geometry.stats }, cache_hits))
+        let edge_index = frame.ctx.light_texture("pvm::edge_index_map", map, projection.layers(), EDGE_INDEX_FORMAT, usage);
+        // The CPU work (silhouettes and volumes) is part of the pass's time.
+        let (volume_depth, edges, stats, silhouette_cache_hits) = frame.pass("penumbra_volumes", |ctx, encoder, ts| -> Result<_> {
+            let (l, r) = (ctx.light.center, ctx.light.radius);
+            let (mut cache_hits, mut geometry) = (0, VolumeGeometry::default());
+            // A point light has no penumbra: skip the volumes entirely.
+            if r > 0.0 {
+                let silhouette = if params.repairs.hidden {
+                    ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges)?
+                } else {
+                    let (edges, cache_hits) = ctx.shared.silhouettes.edges(ctx.prepared, l, params.open_edges)?;
+                    SceneSilhouette { edges, cache_hits, hidden_edges: 0 }
+                };
+                cache_hits = silhouette.cache_hits;
+                // Beyond the far plane of every face (at most sqrt(3) far from the light).
+                let reach = 4.0 * projection.far() as f64 + 4.0 * r;
+                geometry = penumbra_volumes(&silhouette.edges, l, r, reach, params.repairs.cone);
+                geometry.stats.hidden_edges = silhouette.hidden_edges;
+                geometry.stats.silhouette_edges += silhouette.hidden_edges;
+            }
+            // A storage binding may not be empty: one zeroed entry stands for no edges.
+            let points = if geometry.edges.is_empty() { vec![EdgePoints { h0: [0.0; 4], h1: [0.0; 4] }] } else { std::mem::take(&mut geometry.edges) };
+            let bytes: &[u8] = bytemuck::cast_slice(&points);
+            let edges = ctx.buffer("pvm::edges", bytes.len() as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
+            ctx.queue.write_buffer(&edges, 0, bytes);
+            let depth = self.volume_pass.record(ctx, encoder, projection, &geometry.vertices, map, &[&edge_index], ts)?;
+            Ok((depth, edges, geometry.stats, cache_hits))
+        })??;
+        Ok(PvmVolumes { volume_depth, edge_index, edges, stats, silhouette_cache_hits })
     }
 
     /// The paper's two edge maps (4.1.3) rebuilt from the edge-index map,
     /// for the `pvm_edge0` and `pvm_edge1` intermediates.
-    pub fn record_edge_maps(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volumes: &PvmVolumes) -> (wgpu::Texture, wgpu::Texture) {
-        let size = volumes.edge_index.size();
+    fn record_edge_maps(&self, ctx: &FrameContext<'_>, encoder: &mut wgpu::CommandEncoder, volumes: &PvmVolumes, map: u32) -> (PooledTexture, PooledTexture) {
+        let layers = volumes.edge_index.texture.depth_or_array_layers();
         let usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
-        let edge0 = layout::create_texture(device, "pvm::edge0_map", (size.width, size.height), EDGE_POINT_FORMAT, usage);
-        let edge1 = layout::create_texture(device, "pvm::edge1_map", (size.width, size.height), EDGE_POINT_FORMAT, usage);
-        let views = [&volumes.edge_index, &edge0, &edge1].map(layout::view);
-        let bind_group = layout::bind_group(
-            device,
-            "pvm::edge_maps_bind_group",
-            &self.edge_maps_layout,
-            &[
-                wgpu::BindingResource::TextureView(&views[0]),
-                volumes.edges.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&views[1]),
-                wgpu::BindingResource::TextureView(&views[2]),
-            ],
-        );
-        layout::dispatch_per_pixel(encoder, "pvm::edge_maps_pass", &self.edge_maps_pipeline, &bind_group, (size.width, size.height), None);
+        let edge0 = ctx.light_texture("pvm::edge0_map", map, layers, EDGE_POINT_FORMAT, usage);
+        let edge1 = ctx.light_texture("pvm::edge1_map", map, layers, EDGE_POINT_FORMAT, usage);
+        let resources = [Binding::Texture(&volumes.edge_index), Binding::Buffer(&volumes.edges), Binding::Texture(&edge0), Binding::Texture(&edge1)];
+        let bind_group = ctx.pool.bind_group(ctx.device, "pvm::edge_maps_bind_group", &self.edge_maps_layout, &resources);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("pvm::edge_maps_pass"), timestamp_writes: None });
+        pass.set_pipeline(&self.edge_maps_pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(map.div_ceil(8), map.div_ceil(8), layers);
+        drop(pass);
         (edge0, edge1)
     }
-
-    /// Pass 3: visibility per camera pixel.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_visibility(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        params: &PvmParams,
-        frame: &PvmFrame,
-        gbuffer: &GBuffer,
-        shadow_map: &wgpu::Texture,
-        frustum: &LightFrustum,
-        light: ([f32; 3], f32),
-        visibility: &wgpu::Texture,
-        timestamps: Option<PassTimestamps<'_>>,
-    ) {
-        let flags = u32::from(params.falloff) | (u32::from(params.repairs.centre) << 1) | (u32::from(params.repairs.horizon) << 2);
-        let uniforms = layout::parameter_buffer(device, "pvm::visibility_uniforms", &params.shadow.uniform(frustum, light.0, light.1, flags));
-        let v = &frame.volumes;
-        let views = [shadow_map, &v.volume_depth, &v.edge_index, visibility, &frame.membership].map(layout::view);
-        let bind_group = layout::bind_group(
-            device,
-            "pvm::visibility_bind_group",
-            &self.visibility_layout,
-            &[
-                wgpu::BindingResource::TextureView(&gbuffer.position_view),
-                wgpu::BindingResource::TextureView(&gbuffer.normal_view),
-                wgpu::BindingResource::TextureView(&views[0]),
-                wgpu::BindingResource::TextureView(&views[1]),
-                wgpu::BindingResource::TextureView(&views[2]),
-                v.edges.as_entire_binding(),
-                uniforms.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&views[3]),
-                wgpu::BindingResource::TextureView(&views[4]),
-                frame.counter.as_entire_binding(),
-            ],
-        );
-        layout::dispatch_per_pixel(encoder, "pvm::visibility_pass", &self.visibility_pipeline, &bind_group, gbuffer.size, timestamps);
-    }
 }
-

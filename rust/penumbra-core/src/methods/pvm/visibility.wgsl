@@ -1,3 +1,6 @@
+#import shaders/receiver.wgsl
+#import passes/shadow_test.wgsl
+
 // PVM pass 3 (Cournia 4.2, listing 4.2): light visibility per camera pixel.
 // Inside a penumbra volume (the PVDM is nearer the light than the pixel),
 // visibility is the fraction of a disk of the light's radius, centred on the
@@ -5,12 +8,10 @@
 // edge and the pixel, that lies on the unoccluded side (Eq. 4.1, 4.2), with
 // the optional 3k^2 - 2k^3 falloff; outside, the shadow-map test decides.
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
-@group(0) @binding(3) var volume_depth: texture_depth_2d;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
+@group(0) @binding(3) var volume_depth: texture_depth_2d_array;
 // The penumbra volume edge map (4.1.3), by index into `edges` (pvm/volumes.wgsl).
-@group(0) @binding(4) var edge_index: texture_2d<u32>;
+@group(0) @binding(4) var edge_index: texture_2d_array<u32>;
 struct EdgePoints {
     h0: vec4<f32>,
     h1: vec4<f32>,
@@ -34,7 +35,7 @@ fn unit(v: vec3<f32>) -> vec3<f32> {
 }
 
 // k of Eq. 4.2 for the silhouette edge h0-h1 and the receiver p
-// (disk_fraction, Eq. 4.1, is in shaders/shadow_test.wgsl).
+// (disk_fraction, Eq. 4.1, is in passes/shadow_test.wgsl).
 fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
     let r = pvm.center.w;
     let l = pvm.center.xyz;
@@ -68,17 +69,16 @@ const CENTRE_TOLERANCE: f32 = 0.1;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
+    let px = pixel.px;
     var v = 0.0;
     var inside = 0.0;
-    if (!is_background(nt)) {
-        let p = textureLoad(gbuffer_position, px, 0).xyz;
-        let n = nt.xyz;
+    if (pixel.geometry) {
+        let p = pixel.p;
+        let n = pixel.n;
         let cos_theta = light_cosine(pvm, p, n);
         let r = pvm.center.w;
         let horizon = (pvm.mode.y & 4u) != 0u && r > 0.0;
@@ -101,11 +101,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             v = select(0.0, 1.0, centre_lit);
             // Listing 4.2: in a volume when the PVDM is nearer the light than the pixel.
             if (map_depth(pvm, volume_depth, q.xyz) < q.w) {
-                let size_map = vec2<i32>(textureDimensions(edge_index));
-                let t = clamp(vec2<i32>(floor(light_map_coords(pvm.light_space, q.xyz))), vec2<i32>(0), size_map - 1);
+                let m = light_map_point(pvm.light_space, q.xyz);
+                let t = map_texel(textureDimensions(edge_index), m);
                 // The depth map and the index map are written together: a
                 // texel behind a volume holds an index (clamped all the same).
-                let edge = edges[min(max(textureLoad(edge_index, t, 0).x, 1u) - 1u, arrayLength(&edges) - 1u)];
+                let edge = edges[min(max(textureLoad(edge_index, t, m.layer, 0).x, 1u) - 1u, arrayLength(&edges) - 1u)];
                 var k = volume_visibility(p, edge.h0.xyz, edge.h1.xyz);
                 // Repair "centre" (beyond the paper): the volume nearest the
                 // light at this texel need not be the one that shadows p

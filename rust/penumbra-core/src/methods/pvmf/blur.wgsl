@@ -1,3 +1,5 @@
+#import shaders/receiver.wgsl
+
 // PVMF passes 4 and 5 (Cournia 5.3, 5.5): one direction of the separable
 // blur of the visibility buffer,
 //   v = 1/b_s sum_{i = -n_blur/2}^{n_blur/2} S(u + i) B(u, u + i),
@@ -5,9 +7,8 @@
 // them. Only texels in the blur mask are blurred; the others are copied and
 // take no taps.
 
-@group(0) @binding(0) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(1) var source: texture_2d<f32>;
-@group(0) @binding(2) var blur_mask: texture_2d<f32>;
+@group(0) @binding(2) var source: texture_2d<f32>;
+@group(0) @binding(3) var blur_mask: texture_2d<f32>;
 
 struct BlurSettings {
     // One texel along the blur's direction.
@@ -17,24 +18,25 @@ struct BlurSettings {
     // 1 on the pass that counts blurred pixels.
     count: u32,
 };
-@group(0) @binding(3) var<storage, read> blur_params: BlurSettings;
+@group(0) @binding(4) var<storage, read> blur_params: BlurSettings;
 // Per-invocation copies of the parameters, read once in `main` (as in pcss/visibility.wgsl).
 var<private> blur: BlurSettings;
-@group(0) @binding(4) var destination: texture_storage_2d<r32float, write>;
-@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 3>;
+@group(0) @binding(5) var destination: texture_storage_2d<r32float, write>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 3>;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     blur = blur_params;
-    let size = vec2<i32>(textureDimensions(gbuffer_normal));
-    let u = vec2<i32>(id.xy);
-    if (u.x >= size.x || u.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
+    let size = vec2<i32>(textureDimensions(gbuffer_normal));
+    let u = pixel.px;
     var v = textureLoad(source, u, 0).x;
     if (textureLoad(blur_mask, u, 0).x > 0.0) {
         // ID(u): the mesh index in the G-buffer (-1 for background, which is never masked).
-        let id_u = textureLoad(gbuffer_normal, u, 0).w;
+        let id_u = pixel.normal_texel.w;
         var sum = 0.0;
         var b_s = 0.0;
         for (var i = -blur.half_width; i <= blur.half_width; i++) {

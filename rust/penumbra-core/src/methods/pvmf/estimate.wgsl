@@ -1,14 +1,15 @@
+#import shaders/receiver.wgsl
+#import passes/pcf_taps.wgsl
+
 // PVMF pass 3 (Cournia 5.2): visibility estimation per camera pixel. Pixels
 // inside a penumbra volume (the mask is nearer the light than the pixel) or
 // failing the shadow-map test take an n_pcf x n_pcf jittered
 // percentage-closer filter of width w_pcf over the depth shadow map; all
 // others keep the shadow-map test's 0 or 1 and take no taps.
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
-@group(0) @binding(3) var mask_depth: texture_depth_2d;
-@group(0) @binding(4) var edge_distance: texture_2d<f32>;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
+@group(0) @binding(3) var mask_depth: texture_depth_2d_array;
+@group(0) @binding(4) var edge_distance: texture_2d_array<f32>;
 @group(0) @binding(5) var shadow_sampler: sampler_comparison;
 // center.w: the light's radius r.
 @group(0) @binding(6) var<storage, read> pvmf_params: ShadowTest;
@@ -39,26 +40,30 @@ var<private> settings: PvmfSettings;
 // distance is read from the shadow map instead: the stored depth along the
 // receiver's light ray.
 fn occluder_distance(r: Receiver) -> f32 {
-    let size = vec2<i32>(textureDimensions(edge_distance));
+    let ls = pvmf.light_space;
     let centre = vec2<i32>(floor(r.coords));
     var sum = 0.0;
     var count = 0.0;
     for (var j = -1; j <= 1; j++) {
         for (var i = -1; i <= 1; i++) {
-            let t = clamp(centre + 2 * vec2<i32>(i, j), vec2<i32>(0), size - 1);
-            let d = textureLoad(edge_distance, t, 0).x;
-            if (d > 0.0) {
-                sum += d;
-                count += 1.0;
+            // The texel's centre, in the receiver's layer (or, beyond a cube
+            // face's edge, the neighbour face); a face not rendered holds no volume.
+            let m = map_wrap(ls, r.layer, vec2<f32>(centre + 2 * vec2<i32>(i, j)) + 0.5);
+            if (layer_active(ls, m.layer)) {
+                let d = textureLoad(edge_distance, map_texel(textureDimensions(edge_distance), m), m.layer, 0).x;
+                if (d > 0.0) {
+                    sum += d;
+                    count += 1.0;
+                }
             }
         }
     }
     if (count > 0.0) {
         return sum / count;
     }
-    let depth = textureLoad(shadow_map, clamp(centre, vec2<i32>(0), size - 1), 0) * pvmf.light_space.depth.y;
-    // light_ray has unit light depth, so depth * |ray| is the distance.
-    return depth * length(light_ray(pvmf.light_space, r.coords));
+    let depth = map_point_depth(ls, shadow_map, MapPoint(r.layer, vec2<f32>(centre) + 0.5));
+    // light_ray has unit depth along the layer's axis, so depth * |ray| is the distance.
+    return depth * length(light_ray(ls, r.layer, r.coords));
 }
 
 // w_pcf (5.2) in map texels per axis:
@@ -86,18 +91,17 @@ fn filter_width(r: Receiver, p: vec3<f32>, d_o: f32) -> vec2<f32> {
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     pvmf = pvmf_params;
     settings = settings_params;
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
+    let px = pixel.px;
     var v = 0.0;
     var blur = 0.0;
     var width = 0.0;
-    if (!is_background(nt)) {
-        let p = textureLoad(gbuffer_position, px, 0).xyz;
-        let n = nt.xyz;
+    if (pixel.geometry) {
+        let p = pixel.p;
+        let n = pixel.n;
         let cos_theta = light_cosine(pvmf, p, n);
         // Repair "horizon" (beyond the paper, which takes the light's centre
         // for the surface's horizon test): the part of the light below the

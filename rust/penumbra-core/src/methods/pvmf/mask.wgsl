@@ -1,9 +1,10 @@
+#import passes/light_view.wgsl
+
 // PVMF pass 2 (Cournia 5.1): render every silhouette edge's overestimated
 // penumbra volume quadrilaterals from the light into the penumbra volume
 // mask: its depth channel (linear light depth / far, the volume nearest the
 // light) and, in a float channel, d_e, the distance from the light to the edge
-// that gave rise to the volume. Composed after passes/shadow_map.wgsl, whose
-// `shadow` uniform (the light's view) it uses.
+// that gave rise to the volume.
 
 struct MaskVertexOut {
     @builtin(position) clip: vec4<f32>,

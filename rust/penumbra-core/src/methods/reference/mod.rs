@@ -24,19 +24,19 @@
 //! resolve. Samples below a receiver's horizon count as hidden, as in the
 //! ground truth. A point light needs one sample.
 
-use std::collections::BTreeMap;
-
 use glam::{DVec2, DVec3, Vec3};
 
 use crate::error::Result;
-use crate::gpu::{layout, PassTimestamps};
-use crate::light_frustum::LightFrustum;
-use crate::methods::hard::ShadowMapSettings;
-use crate::methods::{ParamReader, ParamValue};
-use crate::passes::gbuffer::GBuffer;
+use crate::frame::Frame;
+use crate::gpu::layout;
+use crate::gpu::pool::{Binding, ResourcePool};
+use crate::gpu::pool::PooledTexture;
+use crate::light_frustum::{light_sample_error, LightProjection};
+use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
+use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
 use crate::passes::shadow_map::ShadowMapPass;
-use crate::scene::PreparedScene;
+use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 
 /// Where the light samples lie (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,27 +64,6 @@ pub struct ReferenceParams {
     pub sampling: LightSampling,
 }
 
-impl ReferenceParams {
-    pub fn read(r: &mut ParamReader<'_>) -> Result<Self> {
-        Ok(Self {
-            shadow: ShadowMapSettings::read(r)?,
-            n_samples: r.int("n_samples", 256, 1, 4096)? as u32,
-            seed: r.int("seed", 0, 0, i64::MAX)? as u64,
-            sampling: match r.choice("sampling", "sphere", &LightSampling::NAMES)? {
-                "disk" => LightSampling::Disk,
-                _ => LightSampling::Sphere,
-            },
-        })
-    }
-
-    pub fn effective(&self) -> BTreeMap<String, ParamValue> {
-        let mut out = self.shadow.effective();
-        out.insert("n_samples".into(), ParamValue::Int(self.n_samples as i64));
-        out.insert("seed".into(), ParamValue::Int(self.seed as i64));
-        out.insert("sampling".into(), ParamValue::Str(self.sampling.name().into()));
-        out
-    }
-}
 
 /// SplitMix64: a small, well-mixed generator; the samples only need to be
 /// deterministic for a seed and uncorrelated across cells.
@@ -235,143 +214,170 @@ pub fn visible_cap_cos(distance: f64, bound: f64) -> f64 {
     (std::f64::consts::FRAC_PI_2 + spread).min(std::f64::consts::PI).cos()
 }
 
-/// Uniform layout of `SampleWeight` in `methods/reference/visibility.wgsl`.
+/// Layout of `SampleWeight` in `methods/reference/visibility.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct SampleWeightUniform {
+pub struct SampleWeightUniform {
     /// The sphere's outward unit normal at the sample; w = 1 for solid-angle weights.
-    normal: [f32; 4],
+    pub(crate) normal: [f32; 4],
     /// The light's centre (xyz).
-    light_center: [f32; 4],
+    pub(crate) light_center: [f32; 4],
 }
 
 pub struct ReferenceShadows {
-    layout: wgpu::BindGroupLayout,
-    accumulate: wgpu::ComputePipeline,
-    resolve: wgpu::ComputePipeline,
+    pass: ScreenPass,
 }
 
-impl ReferenceShadows {
-    pub fn new(device: &wgpu::Device) -> Self {
-        let layout = layout::bind_group_layout(
+impl Method for ReferenceShadows {
+    const NAME: &'static str = "reference";
+    const PAPER: &'static str = "accumulation of hard shadows from n light samples (Herf 3.4, 4.2; Schwarzler et al. Eq. 1-2)";
+    type Params = ReferenceParams;
+
+    fn specs() -> Vec<ParamSpec> {
+        let mut specs = ShadowMapSettings::specs("slope");
+        specs.extend([
+            ParamSpec::int("n_samples", 256, 1, 4096, "light samples (rounded up to a full stratified grid)"),
+            ParamSpec::int("seed", 0, 0, i64::MAX, "fixes the samples' jitter"),
+            ParamSpec::choice(
+                "sampling",
+                "sphere",
+                &LightSampling::NAMES,
+                "samples on the visible sphere (converges to the ground truth) or on Herf's facing disk",
+            ),
+        ]);
+        specs
+    }
+
+    fn params(p: &ParamSet) -> Result<ReferenceParams> {
+        Ok(ReferenceParams {
+            shadow: ShadowMapSettings::from_params(p),
+            n_samples: p.int("n_samples") as u32,
+            seed: p.int("seed") as u64,
+            sampling: if p.choice("sampling") == "disk" { LightSampling::Disk } else { LightSampling::Sphere },
+        })
+    }
+
+    fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
+        let pass = ScreenPass::new(
             device,
-            "reference::layout",
+            pool,
+            "reference::pass",
+            crate::shaders::compose("methods/reference/visibility.wgsl"),
             &[
-                layout::float_texture(0),
-                layout::float_texture(1),
-                layout::depth_texture(2),
-                layout::parameters(3),
-                layout::storage_buffer_rw(4),
-                layout::storage_texture(5, VISIBILITY_FORMAT),
-                layout::parameters(6),
+                layout::depth_array,
+                layout::parameters,
+                layout::storage_buffer_rw,
+                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                layout::parameters,
             ],
+            &["accumulate", "resolve"],
         );
-        let module = crate::shaders::module(device, "reference::shader", crate::shaders::reference());
-        Self {
-            accumulate: layout::compute_pipeline_entry(device, "reference::accumulate_pipeline", &module, &layout, "accumulate"),
-            resolve: layout::compute_pipeline_entry(device, "reference::resolve_pipeline", &module, &layout, "resolve"),
-            layout,
-        }
+        Self { pass }
     }
 
-    /// Records every sample's shadow map and accumulation, and the resolve,
-    /// as one named pass. Returns the number of samples used.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        shadow_pass: &ShadowMapPass,
-        params: &ReferenceParams,
-        scene: &PreparedScene,
-        light: (DVec3, f64),
-        vertices: (&wgpu::Buffer, u32),
-        gbuffer: &GBuffer,
-        visibility: &wgpu::Texture,
-        timestamps: Option<PassTimestamps<'_>>,
-    ) -> Result<usize> {
-        let (center, radius) = light;
-        let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
-        let offset = scene_center - center;
-        let axis = offset.try_normalize().unwrap_or(DVec3::NEG_Y);
-        let samples = match params.sampling {
-            LightSampling::Disk => {
-                let points = light_samples(center, radius, axis, params.n_samples, params.seed);
-                let weight = 1.0 / points.len() as f64;
-                points.into_iter().map(|position| LightSample { position, normal: None, weight }).collect()
-            }
-            LightSampling::Sphere => {
-                let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
-                let cos_max = visible_cap_cos(offset.length(), bound);
-                sphere_samples(center, radius, axis, cos_max, params.n_samples, params.seed)
-            }
-        };
-        let points: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
-        let (w, h) = gbuffer.size;
-        let accumulated = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("reference::accumulated"),
-            // Per pixel: the weighted sum of visibilities and the sum of weights.
-            size: (w as u64 * h as u64 * 8).max(8),
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        });
-        let map = ShadowMapPass::create_map(device, params.shadow.map_size);
-        let (map_view, visibility_view) = (layout::view(&map), layout::view(visibility));
-        let depth = params.shadow.bias.map_depth();
-        let last = samples.len() - 1;
-        for (i, sample) in samples.iter().enumerate() {
-            let s = sample.position;
-            let frustum = LightFrustum::fit(s.as_vec3(), points.iter().copied())?;
-            let first = i == 0;
-            shadow_pass.record_part(device, encoder, &map, &frustum, depth, vertices, timestamps, (first, false));
-            let mut test = params.shadow.uniform(&frustum, s.as_vec3().to_array(), 0.0, 0);
-            test.set_center_w(sample.weight as f32);
-            let uniforms = layout::parameter_buffer(device, "reference::sample_uniforms", &test);
-            let normal = sample.normal.unwrap_or(DVec3::ZERO).as_vec3();
-            let weight_uniform = SampleWeightUniform {
-                normal: [normal.x, normal.y, normal.z, if sample.normal.is_some() { 1.0 } else { 0.0 }],
-                light_center: [center.x as f32, center.y as f32, center.z as f32, 0.0],
+    /// Every sample's shadow map and accumulation, and the resolve, as one
+    /// named pass `light_samples`.
+    fn record(&self, frame: &mut Frame<'_>, params: &ReferenceParams) -> Result<MethodOutput> {
+        params.shadow.check_limits(frame.ctx.max_texture_side())?;
+        let visibility = frame.ctx.screen_texture("reference::visibility");
+        let used = frame.pass("light_samples", |ctx, encoder, timestamps| -> Result<(usize, usize, usize)> {
+            let (center, radius) = (ctx.light.center, ctx.light.radius);
+            let scene = ctx.prepared;
+            let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
+            let offset = scene_center - center;
+            let axis = offset.try_normalize().unwrap_or(DVec3::NEG_Y);
+            let samples = match params.sampling {
+                LightSampling::Disk => {
+                    let points = light_samples(center, radius, axis, params.n_samples, params.seed);
+                    let weight = 1.0 / points.len() as f64;
+                    points.into_iter().map(|position| LightSample { position, normal: None, weight }).collect()
+                }
+                LightSampling::Sphere => {
+                    let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
+                    let cos_max = visible_cap_cos(offset.length(), bound);
+                    sphere_samples(center, radius, axis, cos_max, params.n_samples, params.seed)
+                }
             };
-            let weights = layout::parameter_buffer(device, "reference::sample_weight", &weight_uniform);
-            let bind_group = self.bind_group(device, gbuffer, &map_view, (&uniforms, &weights), &accumulated, &visibility_view);
-            layout::dispatch_per_pixel_writes(encoder, "reference::accumulate_pass", &self.accumulate, &bind_group, gbuffer.size, None);
-            if i == last {
-                layout::dispatch_per_pixel_writes(
-                    encoder,
-                    "reference::resolve_pass",
-                    &self.resolve,
-                    &bind_group,
-                    gbuffer.size,
-                    timestamps.and_then(|t| t.compute_part(false, true)),
-                );
+            let points: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
+            let (w, h) = ctx.size;
+            // Per pixel: the weighted sum of visibilities and the sum of weights.
+            let accumulated = ctx.buffer(
+                "reference::accumulated",
+                (w as u64 * h as u64 * 8).max(8),
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            );
+            encoder.clear_buffer(&accumulated, 0, None);
+            let depth = params.shadow.bias.map_depth();
+            // Every sample's projection (its own fitted frustum, or cube faces
+            // where one frustum cannot cover the scene from it) and parameter
+            // blocks, in two buffers bound at one aligned block per sample.
+            let corners = ctx.corner_positions();
+            let projections = samples
+                .iter()
+                .enumerate()
+                .map(|(i, s)| {
+                    let position = s.position.as_vec3();
+                    LightProjection::fit(position, &points, corners, params.shadow.projection)
+                        .map_err(|e| light_sample_error(e, "reference", i + 1, samples.len(), position))
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let align = ctx.device.limits().min_storage_buffer_offset_alignment as usize;
+            let stride = |size: usize| size.div_ceil(align) * align;
+            let (test_stride, weight_stride) = (stride(std::mem::size_of::<ShadowTestUniform>()), stride(std::mem::size_of::<SampleWeightUniform>()));
+            let mut tests = vec![0u8; test_stride * samples.len()];
+            let mut weights = vec![0u8; weight_stride * samples.len()];
+            for (i, (sample, projection)) in samples.iter().zip(&projections).enumerate() {
+                let mut test = params.shadow.uniform(projection, sample.position.as_vec3().to_array(), 0.0, 0);
+                test.set_center_w(sample.weight as f32);
+                let normal = sample.normal.unwrap_or(DVec3::ZERO).as_vec3();
+                let weight = SampleWeightUniform {
+                    normal: [normal.x, normal.y, normal.z, if sample.normal.is_some() { 1.0 } else { 0.0 }],
+                    light_center: [center.x as f32, center.y as f32, center.z as f32, 0.0],
+                };
+                tests[i * test_stride..][..std::mem::size_of::<ShadowTestUniform>()].copy_from_slice(bytemuck::bytes_of(&test));
+                weights[i * weight_stride..][..std::mem::size_of::<SampleWeightUniform>()].copy_from_slice(bytemuck::bytes_of(&weight));
             }
-        }
-        Ok(samples.len())
-    }
-
-    fn bind_group(
-        &self,
-        device: &wgpu::Device,
-        gbuffer: &GBuffer,
-        map_view: &wgpu::TextureView,
-        (uniforms, weights): (&wgpu::Buffer, &wgpu::Buffer),
-        accumulated: &wgpu::Buffer,
-        visibility_view: &wgpu::TextureView,
-    ) -> wgpu::BindGroup {
-        layout::bind_group(
-            device,
-            "reference::bind_group",
-            &self.layout,
-            &[
-                wgpu::BindingResource::TextureView(&gbuffer.position_view),
-                wgpu::BindingResource::TextureView(&gbuffer.normal_view),
-                wgpu::BindingResource::TextureView(map_view),
-                uniforms.as_entire_binding(),
-                accumulated.as_entire_binding(),
-                wgpu::BindingResource::TextureView(visibility_view),
-                weights.as_entire_binding(),
-            ],
-        )
+            let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+            let test_buffer = ctx.buffer("reference::sample_uniforms", tests.len() as u64, usage);
+            let weight_buffer = ctx.buffer("reference::sample_weights", weights.len() as u64, usage);
+            ctx.queue.write_buffer(&test_buffer, 0, &tests);
+            ctx.queue.write_buffer(&weight_buffer, 0, &weights);
+            // One map per layer count, reused sample after sample.
+            let mut maps: Vec<(u32, PooledTexture)> = Vec::new();
+            let mut faces = 0;
+            let last = samples.len() - 1;
+            for (i, projection) in projections.iter().enumerate() {
+                let layers = projection.layers();
+                if !maps.iter().any(|(l, _)| *l == layers) {
+                    maps.push((layers, ShadowMapPass::create_map(ctx, params.shadow.map_size, layers)));
+                }
+                let map = &maps.iter().find(|(l, _)| *l == layers).expect("made above").1;
+                faces += projection.active_faces() as usize;
+                ctx.shared.shadow_map.record(ctx, encoder, map, projection, depth, timestamps, (i == 0, false));
+                let bind_group = self.pass.bind_group(
+                    ctx,
+                    &[
+                        Binding::Texture(map),
+                        Binding::BufferRange(&test_buffer, (i * test_stride) as u64, std::mem::size_of::<ShadowTestUniform>() as u64),
+                        Binding::Buffer(&accumulated),
+                        Binding::Texture(&visibility),
+                        Binding::BufferRange(&weight_buffer, (i * weight_stride) as u64, std::mem::size_of::<SampleWeightUniform>() as u64),
+                    ],
+                );
+                self.pass.dispatch(ctx, encoder, "accumulate", &bind_group, None);
+                if i == last {
+                    self.pass.dispatch(ctx, encoder, "resolve", &bind_group, timestamps.and_then(|t| t.compute_part(false, true)));
+                }
+            }
+            Ok((samples.len(), faces, projections.iter().filter(|p| p.is_cube()).count()))
+        })??;
+        let (used, faces, cubes) = used;
+        frame.stat("light_samples", used as i64);
+        frame.stat("shadow_maps_rendered", used as i64);
+        frame.stat("shadow_map_faces", faces as i64);
+        frame.stat("cube_maps", cubes as i64);
+        frame.stat("map_size", params.shadow.map_size as i64);
+        Ok(MethodOutput { visibility })
     }
 }
 

@@ -1,11 +1,12 @@
+#import shaders/receiver.wgsl
+#import passes/shadow_test.wgsl
+
 // Method `reference` (Herf 3.4 and 4.2; Schwarzler Eq. 1-2): visibility is
 // the weighted average of hard shadows from n points on the light.
 // `accumulate` adds one sample's shadow-map test and its weight to a
 // per-pixel accumulation buffer; `resolve` writes their ratio as visibility.
 
-@group(0) @binding(0) var gbuffer_position: texture_2d<f32>;
-@group(0) @binding(1) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(2) var shadow_map: texture_depth_2d;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 // The shadow test from one light sample; center.xyz = the sample, center.w =
 // its weight: 1/n (equal weights), or the inverse of its sampling density.
 @group(0) @binding(3) var<storage, read> sample_test: ShadowTest;
@@ -42,22 +43,17 @@ fn sample_weight_at(p: vec3<f32>) -> f32 {
 
 @compute @workgroup_size(8, 8)
 fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
+    let pixel = screen_pixel(id);
+    if (!pixel.inside || !pixel.geometry) {
         return;
     }
-    let px = vec2<i32>(id.xy);
-    let nt = textureLoad(gbuffer_normal, px, 0);
-    if (is_background(nt)) {
-        return;
-    }
-    let p = textureLoad(gbuffer_position, px, 0).xyz;
-    let w = sample_weight_at(p);
+    let w = sample_weight_at(pixel.p);
     if (w <= 0.0) {
         return;
     }
     // Samples below the surface's horizon count as hidden (shadow_test_visibility).
-    let v = shadow_test_visibility(sample_test, shadow_map, p, nt.xyz);
+    let v = shadow_test_visibility(sample_test, shadow_map, pixel.p, pixel.n);
+    let size = textureDimensions(gbuffer_normal);
     accumulated[id.y * size.x + id.x] += vec2<f32>(w * v, w);
 }
 

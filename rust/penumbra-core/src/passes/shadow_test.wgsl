@@ -1,5 +1,8 @@
+#import shaders/common.wgsl
+#import shaders/light_space.wgsl
+
 // The shadow-map test from the light centre with its bias schemes (Cournia
-// ch. 3), shared by `hard` and the final pass of `pvm`:
+// ch. 3), shared by every shadow-map method (passes/shadow_test.rs):
 //   mode 0 `slope`: receiver-side normal offset plus slope-scaled depth bias,
 //                   both in texels of the map at the receiver's depth;
 //   mode 1 `second_depth`: map of back faces (front faces culled; Wang and
@@ -39,15 +42,23 @@ fn biased_receiver(t: ShadowTest, p: vec3<f32>, n: vec3<f32>, cos_theta: f32) ->
     return vec4<f32>(q, light_view_depth(t.light_space, q) - bias);
 }
 
+// World-unit depth, along its layer's axis, stored in a linear-depth map at
+// the texel under `m`; the far plane in a layer that was not rendered (a
+// cube face that sees no geometry holds nothing).
+fn map_point_depth(ls: LightSpace, map: texture_depth_2d_array, m: MapPoint) -> f32 {
+    if (!layer_active(ls, m.layer)) {
+        return ls.depth.y;
+    }
+    return textureLoad(map, map_texel(textureDimensions(map), m), m.layer, 0) * ls.depth.y;
+}
+
 // World-unit depth stored in a linear-depth map at the texel over `q`.
-fn map_depth(t: ShadowTest, map: texture_depth_2d, q: vec3<f32>) -> f32 {
-    let size = vec2<i32>(textureDimensions(map));
-    let c = clamp(vec2<i32>(floor(light_map_coords(t.light_space, q))), vec2<i32>(0), size - 1);
-    return textureLoad(map, c, 0) * t.light_space.depth.y;
+fn map_depth(t: ShadowTest, map: texture_depth_2d_array, q: vec3<f32>) -> f32 {
+    return map_point_depth(t.light_space, map, light_map_point(t.light_space, q));
 }
 
 // Hard visibility of the light centre: 0 or 1.
-fn shadow_test_visibility(t: ShadowTest, map: texture_depth_2d, p: vec3<f32>, n: vec3<f32>) -> f32 {
+fn shadow_test_visibility(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let cos_theta = light_cosine(t, p, n);
     // Centre below the surface's horizon: the surface itself hides it.
     if (cos_theta <= 0.0) {

@@ -1,3 +1,6 @@
+#import shaders/common.wgsl
+#import passes/shadow_test.wgsl
+
 // Shared by the filtering methods (`pcf`, `pcss`, `pvmf`): shadow-map taps
 // away from the receiver's own texel (percentage-closer filtering, Reeves et
 // al. 1987; Cournia ch. 3 and 5.2).
@@ -7,14 +10,15 @@
 // receiver's own depth, so that a wide kernel over a receiver sloped towards
 // the light does not shadow itself. Taps go through a comparison sampler:
 // with linear filtering that is the hardware's 2x2 bilinear PCF.
-// Requires common.wgsl, light_space.wgsl and shadow_test.wgsl.
 
 struct Receiver {
     // A point on the receiver's plane (the biased lookup point) and its unit normal.
     origin: vec3<f32>,
     normal: vec3<f32>,
-    // Light depth of `origin` and its map coordinates in texels.
+    // Light depth of `origin` along its layer's axis, the layer and its map
+    // coordinates there in texels: taps step away from them in this layer.
     depth: f32,
+    layer: i32,
     coords: vec2<f32>,
     // Depth bias subtracted from every tap, world units.
     bias: f32,
@@ -37,29 +41,19 @@ fn pcf_receiver(t: ShadowTest, p: vec3<f32>, n: vec3<f32>) -> Receiver {
         r.bias = t.bias.y * r.texel;
     }
     r.depth = light_view_depth(t.light_space, r.origin);
-    r.coords = light_map_coords(t.light_space, r.origin);
+    let m = light_map_point(t.light_space, r.origin);
+    r.layer = m.layer;
+    r.coords = m.coords;
     return r;
 }
 
-// World direction of the light ray through map coordinates `c` (texels),
-// scaled so that its light-view depth is 1.
-fn light_ray(ls: LightSpace, c: vec2<f32>) -> vec3<f32> {
-    let uv = c / ls.depth.z;
-    let x = ls.window.x + uv.x * (ls.window.y - ls.window.x);
-    let y = ls.window.z + (1.0 - uv.y) * (ls.window.w - ls.window.z);
-    // The view matrix is a rigid transform: its 3x3 part is a rotation, whose
-    // inverse is its transpose.
-    let rot = mat3x3<f32>(ls.view[0].xyz, ls.view[1].xyz, ls.view[2].xyz);
-    return transpose(rot) * vec3<f32>(x, y, -1.0);
-}
-
-// Light depth at which the ray through map coordinates `c` meets the
-// receiver's plane, clamped to within `t.bias.w` (the largest slope the bias
+// Light depth (along the receiver's layer's axis) at which the ray through
+// map coordinates `c` of the receiver's layer meets the receiver's plane, clamped to within `t.bias.w` (the largest slope the bias
 // schemes use) times the lateral distance from the receiver.
 fn plane_depth(t: ShadowTest, r: Receiver, c: vec2<f32>) -> f32 {
     let lateral = length(c - r.coords) * r.texel;
     let limit = t.bias.w * lateral;
-    let d = light_ray(t.light_space, c);
+    let d = light_ray(t.light_space, r.layer, c);
     // The light is on the normal's side of the plane (cos_theta > 0), so the
     // ray meets the plane ahead of it exactly where dot(n, d) < 0; elsewhere
     // (beyond the plane's horizon as seen from the light) the plane is taken
@@ -72,11 +66,23 @@ fn plane_depth(t: ShadowTest, r: Receiver, c: vec2<f32>) -> f32 {
     return clamp(depth, r.depth - limit, r.depth + limit);
 }
 
-// One tap: the fraction of the (bilinearly weighted) texels around `c` that
-// do not hide the receiver's plane.
-fn pcf_tap(t: ShadowTest, map: texture_depth_2d, cmp: sampler_comparison, r: Receiver, c: vec2<f32>) -> f32 {
-    let reference = (plane_depth(t, r, c) - r.bias) / t.light_space.depth.y;
-    return textureSampleCompareLevel(map, cmp, c / t.light_space.depth.z, reference);
+// One tap: the fraction of the (bilinearly weighted) texels around `c`
+// (coordinates in the receiver's layer; on a cube, beyond its edges they
+// read the neighbour face) that do not hide the receiver's plane. A cube
+// face that was not rendered holds no occluder.
+fn pcf_tap(t: ShadowTest, map: texture_depth_2d_array, cmp: sampler_comparison, r: Receiver, c: vec2<f32>) -> f32 {
+    let ls = t.light_space;
+    let m = map_wrap(ls, r.layer, c);
+    if (!layer_active(ls, m.layer)) {
+        return 1.0;
+    }
+    // The plane's depth along the axis of the layer read (the same ray). Where
+    // the plane lies beyond the far plane (or the ray passes above its
+    // horizon), only drawn surfaces hide it: a texel where nothing was drawn
+    // (cleared to the far plane, 1) passes.
+    let depth = plane_depth(t, r, c) * layer_depth_scale(ls, r.layer, c, m.layer);
+    let reference = min((depth - r.bias) / ls.depth.y, 1.0);
+    return textureSampleCompareLevel(map, cmp, m.coords / ls.depth.z, m.layer, reference);
 }
 
 // PCG hash (O'Neill; the "pcg" of Jarzynski and Olano 2020).

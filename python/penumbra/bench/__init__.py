@@ -1,0 +1,90 @@
+"""``penumbra bench``: run time against error for every method, with Mitsuba
+and the in-engine ``reference`` as peers, in one process.
+
+A small TOML file (``benchmarks/bench.toml``) names the scenes, the image
+size, the ground truth's samples, the repeats, a parameter grid per method,
+the peers' sample counts and a scaling run; its ``[quick]`` table overrides
+any of them for ``--quick`` (the CI run). For every scene x method x setting
+the benchmark renders after a warm-up, takes the median time of ``repeats``
+renders per pass and in total, and every SPEC metric against the cached
+Mitsuba ground truth (with the ground truth's own noise from a second seed).
+The peers run in the same process: Mitsuba's visibility estimator at a range
+of rays per pixel (another seed than the ground truth's, not cached: timed)
+and its radiance at the same spp, and ``reference`` at several sample counts.
+
+Written to ``--out`` (default ``benchmarks/results/<config name>``):
+
+- ``results.csv``: one row per configuration;
+- ``pareto.png``: time against penumbra visibility RMSE, log-log, one curve
+  per method (means over the scenes), peers included;
+- ``pareto.md``: the Pareto-optimal settings of each method;
+- ``ratios.md``: each method's time over ``hard``'s, and its best setting's
+  time over the time ``reference`` and Mitsuba need for the same error;
+- ``scaling.csv`` and ``scaling.png``: cost against image size and against
+  penumbra area on screen (a light-radius sweep);
+- ``machine.md``: the machine, the adapter, the versions and the commit.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Sequence
+
+from penumbra.bench.config import BenchConfig, expand, label, load_config
+from penumbra.bench.report import (
+    ERROR,
+    Point,
+    aggregate,
+    pareto_front,
+    pareto_table,
+    plot_pareto,
+    plot_scaling,
+    ratio_tables,
+    time_at_error,
+    write_csv,
+)
+from penumbra.bench.runner import machine_description, make_renderer, run, run_scaling
+
+__all__ = [
+    "BenchConfig",
+    "load_config",
+    "expand",
+    "label",
+    "run",
+    "run_scaling",
+    "make_renderer",
+    "machine_description",
+    "ERROR",
+    "Point",
+    "aggregate",
+    "pareto_front",
+    "time_at_error",
+    "pareto_table",
+    "ratio_tables",
+    "plot_pareto",
+    "plot_scaling",
+    "write_csv",
+    "main",
+    "build_parser",
+    "run_from_args",
+]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser(argparse.ArgumentParser(prog="penumbra bench", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter))
+    return run_from_args(parser.parse_args(argv))
+
+
+def build_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("--config", default="benchmarks/bench.toml", help="the benchmark config (default benchmarks/bench.toml)")
+    parser.add_argument("--quick", action="store_true", help="apply the config's [quick] table (the CI run: a few minutes)")
+    parser.add_argument("--out", help="output folder (default benchmarks/results/<config name>)")
+    return parser
+
+
+def run_from_args(args: argparse.Namespace) -> int:
+    cfg = load_config(args.config, quick=args.quick)
+    out = args.out or str(Path("benchmarks") / "results" / cfg.name)
+    run(cfg, out)
+    return 0

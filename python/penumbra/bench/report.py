@@ -1,0 +1,208 @@
+"""``penumbra bench`` reports: Pareto fronts, equal-error ratios, the
+markdown tables, the plots and the CSV files."""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+__all__ = [
+    "ERROR",
+    "Point",
+    "aggregate",
+    "pareto_front",
+    "time_at_error",
+    "pareto_table",
+    "ratio_tables",
+    "plot_pareto",
+    "plot_scaling",
+    "write_csv",
+]
+
+#: The metric the Pareto plot, the tables and the ratios use.
+ERROR = "visibility_rmse_penumbra"
+
+
+def pareto_front(points: Sequence[tuple[float, float]]) -> list[int]:
+    """Indices of the (time, error) points no other point beats in both,
+    sorted by time; ties in time keep the lower error."""
+    order = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))
+    front: list[int] = []
+    best = math.inf
+    for i in order:
+        if points[i][1] < best:
+            front.append(i)
+            best = points[i][1]
+    return front
+
+
+def time_at_error(curve: Sequence[tuple[float, float]], error: float) -> tuple[float, str]:
+    """The time a peer needs for ``error``, from its (time, error) points:
+    interpolated log-log along its Pareto front. Returns (time, bound) where
+    bound is ``"="``; ``"<="`` when even its cheapest point is at least this
+    accurate (its time is an upper bound); ``">="`` when no point reaches the
+    error (its most expensive time is a lower bound)."""
+    points = [curve[i] for i in pareto_front(curve) if curve[i][0] > 0 and curve[i][1] > 0]
+    if not points or not error > 0:
+        return math.nan, "="
+    if error >= points[0][1]:
+        return points[0][0], "<="
+    if error < points[-1][1]:
+        return points[-1][0], ">="
+    for (t0, e0), (t1, e1) in zip(points, points[1:]):
+        if e1 <= error <= e0:
+            # e0 > e1 > 0 on a front, so the log difference is positive.
+            f = (math.log(e0) - math.log(error)) / (math.log(e0) - math.log(e1))
+            return math.exp(math.log(t0) + f * (math.log(t1) - math.log(t0))), "="
+    return points[-1][0], ">="  # unreachable: the front is monotone
+
+
+def write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
+    columns: list[str] = []
+    for row in rows:
+        columns += [k for k in row if k not in columns]
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=columns)
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+@dataclass
+class Point:
+    """One configuration averaged over the scenes."""
+
+    method: str
+    label: str
+    kind: str
+    ms: float
+    time_over_hard: float
+    error: float
+
+
+def aggregate(rows: list[dict[str, Any]]) -> list[Point]:
+    """Means over the scenes of each (method, setting): time, time over
+    ``hard`` and penumbra visibility RMSE."""
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault((row["method"], row["label"]), []).append(row)
+    return [
+        Point(method, lab, g[0]["kind"], float(np.mean([r["total_ms"] for r in g])),
+              float(np.mean([r["time_over_hard"] for r in g])), float(np.mean([r[ERROR] for r in g])))
+        for (method, lab), g in groups.items()
+    ]
+
+
+def _by_method(points: list[Point]) -> dict[str, list[Point]]:
+    out: dict[str, list[Point]] = {}
+    for p in points:
+        out.setdefault(p.method, []).append(p)
+    return out
+
+
+def pareto_table(points: list[Point]) -> str:
+    """The markdown table of each method's Pareto-optimal settings."""
+    lines = ["| method | setting | time (ms) | time / hard | penumbra visibility RMSE |", "|---|---|---|---|---|"]
+    for method, group in _by_method(points).items():
+        for i in pareto_front([(p.ms, p.error) for p in group]):
+            p = group[i]
+            lines.append(f"| {method} | {p.label} | {p.ms:.1f} | {p.time_over_hard:.2f} | {p.error:.4f} |")
+    return "\n".join(lines) + "\n"
+
+
+def _ratio(t: float, peer: tuple[float, str]) -> str:
+    peer_t, bound = peer
+    if not math.isfinite(peer_t) or peer_t <= 0:
+        return "n/a"
+    # The method's time over the peer's: a bound on the peer's time flips.
+    flip = {"=": "", "<=": "≥ ", ">=": "≤ "}[bound]
+    return f"{flip}{t / peer_t:.3g}"
+
+
+def ratio_tables(rows: list[dict[str, Any]], points: list[Point]) -> str:
+    """Each method's best setting (lowest error) against the peers at the
+    same error, over the scene means and per scene."""
+    peers = {m: [(p.ms, p.error) for p in points if p.method == m] for m in ("reference", "mitsuba")}
+    lines = [
+        "Means over the scenes. Best setting: the lowest penumbra visibility RMSE. The peers' times at that error are",
+        "interpolated log-log along their Pareto fronts; ≥ / ≤ mark bounds where a peer's tested range does not reach it.",
+        "",
+        "| method | best setting | penumbra RMSE | time (ms) | time / hard | time / reference at equal error | time / Mitsuba at equal error |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for method, group in _by_method(points).items():
+        if method == "mitsuba":
+            continue
+        best = min(group, key=lambda p: p.error)
+        lines.append(
+            f"| {method} | {best.label} | {best.error:.4f} | {best.ms:.1f} | {best.time_over_hard:.2f} | "
+            f"{_ratio(best.ms, time_at_error(peers['reference'], best.error))} | {_ratio(best.ms, time_at_error(peers['mitsuba'], best.error))} |"
+        )
+    lines += ["", "Per scene:", "", "| scene | method | best setting | penumbra RMSE | time / hard | time / reference | time / Mitsuba |", "|---|---|---|---|---|---|---|"]
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        here = [r for r in rows if r["scene"] == scene]
+        curves = {m: [(r["total_ms"], r[ERROR]) for r in here if r["method"] == m] for m in ("reference", "mitsuba")}
+        for method in dict.fromkeys(r["method"] for r in here):
+            if method == "mitsuba":
+                continue
+            best_row = min((r for r in here if r["method"] == method), key=lambda r: r[ERROR])
+            lines.append(
+                f"| {scene} | {method} | {best_row['label']} | {best_row[ERROR]:.4f} | {best_row['time_over_hard']:.2f} | "
+                f"{_ratio(best_row['total_ms'], time_at_error(curves['reference'], best_row[ERROR]))} | "
+                f"{_ratio(best_row['total_ms'], time_at_error(curves['mitsuba'], best_row[ERROR]))} |"
+            )
+    return "\n".join(lines) + "\n"
+
+
+def plot_pareto(points: list[Point], path: Path, title: str) -> None:
+    """Time against penumbra visibility RMSE, log-log: every setting as a dot,
+    each method's Pareto front as a line, peers dashed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    for method, group in _by_method(points).items():
+        xy = [(p.ms, p.error) for p in group]
+        front = [xy[i] for i in pareto_front(xy)]
+        peer = group[0].kind == "peer"
+        (line,) = ax.plot([t for t, _ in front], [e for _, e in front], "--" if peer else "-", marker="o", label=method)
+        ax.scatter([t for t, _ in xy], [e for _, e in xy], s=10, color=line.get_color(), alpha=0.4)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("time per render (ms)")
+    ax.set_ylabel("penumbra visibility RMSE vs ground truth")
+    ax.set_title(title, fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_scaling(rows: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+    for ax, sweep, x, xlabel in ((axes[0], "size", "pixels", "image pixels"), (axes[1], "radius", "penumbra_pixels", "penumbra pixels on screen (light radius sweep)")):
+        for method in dict.fromkeys(r["method"] for r in rows):
+            pts = sorted((r[x], r["total_ms"]) for r in rows if r["sweep"] == sweep and r["method"] == method)
+            if pts:
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=method)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("time per render (ms)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

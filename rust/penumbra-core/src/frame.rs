@@ -1,0 +1,370 @@
+//! The frame: everything one render's passes read and leave behind, handed
+//! by the renderer to the method it renders with.
+//!
+//! [`FrameContext`] is fixed before the method records: device, scene,
+//! camera, the light and its shadow-map frustum, the G-buffer, and the
+//! passes every method may share ([`SharedPasses`]). [`Frame`] adds what a
+//! method records into: named passes (timed by the profiler), the pass
+//! cache ([`Frame::cached`]), pooled resources that stay in use until the
+//! frame's work is done, stats, counters read back into stats, and
+//! intermediate images.
+
+use std::any::Any;
+use std::cell::OnceCell;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use glam::{DVec3, Vec3};
+
+use crate::error::{Error, Result};
+use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
+use crate::gpu::{PassTimestamps, Profiler};
+use crate::light_frustum::{LightProjection, ProjectionMode};
+use crate::pass_cache::{Entry, PassCache, PassKey};
+use crate::passes::gbuffer::GBuffer;
+use crate::passes::samplers::ComparisonSamplers;
+use crate::passes::shadow_map::ShadowMapPass;
+use crate::scene::{Camera, PreparedScene, Scene};
+use crate::silhouettes::SilhouetteCache;
+
+/// Passes and objects built once by the renderer and shared by the methods.
+pub struct SharedPasses {
+    /// Depth maps from a point (the light centre, or a light sample).
+    pub shadow_map: ShadowMapPass,
+    /// Both comparison samplers of the percentage-closer methods.
+    pub samplers: ComparisonSamplers,
+    /// Topology and silhouettes, cached by mesh content and light centre.
+    pub silhouettes: SilhouetteCache,
+}
+
+/// The sphere light, in the precisions the passes use.
+#[derive(Debug, Clone, Copy)]
+pub struct Light {
+    /// As the scene gives it (what uniforms carry).
+    pub center_f32: [f32; 3],
+    pub radius_f32: f32,
+    /// The same values in double precision (CPU geometry).
+    pub center: DVec3,
+    pub radius: f64,
+}
+
+/// A method's intermediate image, read back on request: (rows, columns) or
+/// (rows, columns, channels), with a leading layer axis for a texture of
+/// several layers (cube faces).
+pub struct Intermediate {
+    pub name: &'static str,
+    pub texture: wgpu::Texture,
+    pub aspect: wgpu::TextureAspect,
+    /// Channels kept of those stored.
+    pub channels: usize,
+    /// Multiplies the stored values: a linear-depth map stores depth / far
+    /// and is read back in world units (`far`); 1 for other images.
+    pub scale: f32,
+}
+
+impl Intermediate {
+    /// A linear-depth map of a projection whose far plane is `far`.
+    pub fn depth(name: &'static str, texture: &wgpu::Texture, far: f32) -> Self {
+        Self { name, texture: texture.clone(), aspect: wgpu::TextureAspect::DepthOnly, channels: 1, scale: far }
+    }
+
+    pub fn color(name: &'static str, texture: &wgpu::Texture, channels: usize) -> Self {
+        Self { name, texture: texture.clone(), aspect: wgpu::TextureAspect::All, channels, scale: 1.0 }
+    }
+}
+
+/// What every pass of one render reads.
+pub struct FrameContext<'r> {
+    pub device: &'r wgpu::Device,
+    pub queue: &'r wgpu::Queue,
+    pub shared: &'r SharedPasses,
+    pub pool: &'r ResourcePool,
+    pub scene: &'r Scene,
+    pub prepared: &'r PreparedScene,
+    pub camera: &'r Camera,
+    /// Image size in pixels.
+    pub size: (u32, u32),
+    pub light: Light,
+    pub gbuffer: Arc<GBuffer>,
+    /// The G-buffer's pass-cache key (passes that read it include it in theirs).
+    pub gbuffer_key: PassKey,
+    /// The geometry's hash as key bytes (zero when there is no pass cache).
+    pub geometry: [u8; 8],
+    /// The triangle corners, uploaded on first use.
+    vertices: OnceCell<PooledBuffer>,
+    /// Their positions, for projection fits.
+    corner_positions: OnceCell<Vec<Vec3>>,
+    /// The light centre's projections fitted so far, by mode.
+    projections: std::cell::RefCell<Vec<(ProjectionMode, Arc<LightProjection>)>>,
+    /// Pooled resources this frame took: in use until the frame ends.
+    held: std::cell::RefCell<Vec<Arc<dyn Any + Send + Sync>>>,
+}
+
+impl<'r> FrameContext<'r> {
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn new(
+        device: &'r wgpu::Device,
+        queue: &'r wgpu::Queue,
+        shared: &'r SharedPasses,
+        pool: &'r ResourcePool,
+        scene: &'r Scene,
+        prepared: &'r PreparedScene,
+        camera: &'r Camera,
+        gbuffer: (Arc<GBuffer>, PassKey),
+        geometry: [u8; 8],
+    ) -> Self {
+        let l = &scene.light;
+        let light = Light {
+            center_f32: l.center,
+            radius_f32: l.radius,
+            center: glam::Vec3::from(l.center).as_dvec3(),
+            radius: l.radius as f64,
+        };
+        Self {
+            device,
+            queue,
+            shared,
+            pool,
+            scene,
+            prepared,
+            camera,
+            size: (camera.width, camera.height),
+            light,
+            gbuffer: gbuffer.0,
+            gbuffer_key: gbuffer.1,
+            geometry,
+            vertices: OnceCell::new(),
+            corner_positions: OnceCell::new(),
+            projections: Default::default(),
+            held: Default::default(),
+        }
+    }
+
+    /// The triangle corners' positions, three per triangle.
+    pub fn corner_positions(&self) -> &[Vec3] {
+        self.corner_positions.get_or_init(|| self.prepared.corners.iter().map(|c| Vec3::from(c.position)).collect())
+    }
+
+    /// The shadow-map projection from the light centre that `mode` asks for
+    /// (fitted once per frame and mode): the fitted frustum, or cube faces.
+    pub fn projection(&self, mode: ProjectionMode) -> Result<Arc<LightProjection>> {
+        if let Some((_, p)) = self.projections.borrow().iter().find(|(m, _)| *m == mode) {
+            return Ok(p.clone());
+        }
+        let corners = self.corner_positions();
+        let fitted = Arc::new(LightProjection::fit(Vec3::from(self.light.center_f32), corners, corners, mode)?);
+        self.projections.borrow_mut().push((mode, fitted.clone()));
+        Ok(fitted)
+    }
+
+    /// The scene's triangle corners as a vertex buffer, and their count.
+    /// Uploaded only when a pass draws the geometry: not when the pass cache
+    /// supplies the G-buffer and the shadow map.
+    pub fn vertices(&self) -> (&wgpu::Buffer, u32) {
+        let buffer = self.vertices.get_or_init(|| {
+            let bytes: &[u8] = bytemuck::cast_slice(&self.prepared.corners);
+            let usage = wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST;
+            let buffer = self.buffer("frame::corners", (bytes.len() as u64).max(4), usage);
+            if !bytes.is_empty() {
+                self.queue.write_buffer(&buffer, 0, bytes);
+            }
+            buffer
+        });
+        (buffer, self.prepared.corners.len() as u32)
+    }
+
+    fn hold<T: Any + Send + Sync>(&self, handle: &Arc<T>) {
+        self.held.borrow_mut().push(handle.clone());
+    }
+
+    /// A pooled texture, in use until the frame ends.
+    pub fn texture(&self, label: &str, size: (u32, u32), format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> PooledTexture {
+        self.texture_of(label, TextureKey::plain(size, format, usage))
+    }
+
+    /// A pooled light-space image of one layer per projection face
+    /// (shadow maps and what else is rendered from the light), in use until
+    /// the frame ends.
+    pub fn light_texture(&self, label: &str, map_size: u32, layers: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> PooledTexture {
+        self.texture_of(label, TextureKey { size: (map_size, map_size), format, usage, layers })
+    }
+
+    fn texture_of(&self, label: &str, key: TextureKey) -> PooledTexture {
+        let texture = self.pool.texture(self.device, label, key);
+        self.hold(&texture);
+        texture
+    }
+
+    /// A pooled buffer, in use until the frame ends; its contents are stale.
+    pub fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> PooledBuffer {
+        let buffer = self.pool.buffer(self.device, label, size, usage);
+        self.hold(&buffer);
+        buffer
+    }
+
+    /// A pooled buffer holding `value` for a `layout::parameters` binding.
+    pub fn parameters<T: bytemuck::Pod>(&self, label: &str, value: &T) -> PooledBuffer {
+        let bytes = bytemuck::bytes_of(value);
+        let buffer = self.buffer(label, bytes.len() as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
+        self.queue.write_buffer(&buffer, 0, bytes);
+        buffer
+    }
+
+    /// A pooled storage buffer of `count` u32 counters, cleared to zero in
+    /// `encoder` before any later pass (readable back with `Frame::counters`).
+    pub fn counters(&self, label: &str, count: usize, encoder: &mut wgpu::CommandEncoder) -> PooledBuffer {
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let buffer = self.buffer(label, 4 * count.max(1) as u64, usage);
+        encoder.clear_buffer(&buffer, 0, None);
+        buffer
+    }
+
+    /// A visibility-format image of the camera's size that a compute pass
+    /// writes and later passes read.
+    pub fn screen_texture(&self, label: &str) -> PooledTexture {
+        self.texture(
+            label,
+            self.size,
+            crate::passes::shading::VISIBILITY_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        )
+    }
+
+    /// The largest texture side the adapter allows.
+    pub fn max_texture_side(&self) -> u32 {
+        self.device.limits().max_texture_dimension_2d
+    }
+}
+
+/// One render in progress.
+pub struct Frame<'r> {
+    pub ctx: FrameContext<'r>,
+    profiler: Profiler<'r>,
+    cache: &'r PassCache,
+    /// Outputs of cacheable passes that ran: cached once the frame's work is done.
+    fresh: Vec<(&'static str, PassKey, Entry)>,
+    reused: Vec<&'static str>,
+    stats: BTreeMap<String, i64>,
+    counters: Vec<(wgpu::Buffer, &'static [&'static str])>,
+    intermediates: Vec<Intermediate>,
+    want_intermediates: bool,
+}
+
+/// What a frame recorded besides its passes, for the renderer to read back.
+pub(crate) struct FrameRecord<'r> {
+    pub profiler: Profiler<'r>,
+    pub fresh: Vec<(&'static str, PassKey, Entry)>,
+    pub reused: Vec<&'static str>,
+    pub stats: BTreeMap<String, i64>,
+    pub counters: Vec<(wgpu::Buffer, &'static [&'static str])>,
+    pub intermediates: Vec<Intermediate>,
+    pub held: Vec<Arc<dyn Any + Send + Sync>>,
+}
+
+impl<'r> Frame<'r> {
+    pub(crate) fn new(ctx: FrameContext<'r>, profiler: Profiler<'r>, cache: &'r PassCache, want_intermediates: bool) -> Self {
+        Self {
+            ctx,
+            profiler,
+            cache,
+            fresh: Vec::new(),
+            reused: Vec::new(),
+            stats: BTreeMap::new(),
+            counters: Vec::new(),
+            intermediates: Vec::new(),
+            want_intermediates,
+        }
+    }
+
+    /// Records one named pass (its time is `timings[name]`): `record` gets
+    /// the frame's context, the encoder and, with GPU timestamps, where its
+    /// wgpu pass (or the first and last of several) writes them.
+    pub fn pass<T>(
+        &mut self,
+        name: &str,
+        record: impl FnOnce(&FrameContext<'r>, &mut wgpu::CommandEncoder, Option<PassTimestamps<'_>>) -> T,
+    ) -> Result<T> {
+        let ctx = &self.ctx;
+        let mut out = None;
+        self.profiler.pass(name, |encoder, ts| out = Some(record(ctx, encoder, ts)))?;
+        out.ok_or_else(|| Error::Gpu(format!("pass '{name}' did not run")))
+    }
+
+    /// Untimed work (buffer clears and copies between passes).
+    pub fn untimed<T>(&mut self, record: impl FnOnce(&FrameContext<'r>, &mut wgpu::CommandEncoder) -> T) -> T {
+        record(&self.ctx, self.profiler.encoder())
+    }
+
+    /// The output of cacheable pass `name` for `key`: the cached one when the
+    /// pass cache holds it (the pass is then `reused`), else what `record`
+    /// makes, which enters the cache once this frame's work is done.
+    pub fn cached<T: Any + Send + Sync>(
+        &mut self,
+        name: &'static str,
+        key: PassKey,
+        record: impl FnOnce(&mut Self) -> Result<Arc<T>>,
+    ) -> Result<Arc<T>> {
+        if let Some(hit) = self.cache.get::<T>(name, &key) {
+            self.reused.push(name);
+            return Ok(hit);
+        }
+        let value = record(self)?;
+        if self.cache.enabled() {
+            self.fresh.push((name, key, value.clone()));
+        }
+        Ok(value)
+    }
+
+    /// Marks cacheable pass `name` as reused from the cache (for passes the
+    /// renderer looks up itself).
+    pub(crate) fn reused(&mut self, name: &'static str) {
+        self.reused.push(name);
+    }
+
+    /// An output of cacheable pass `name` that ran in this frame, to cache
+    /// once the frame's work is done.
+    pub(crate) fn fresh<T: Any + Send + Sync>(&mut self, name: &'static str, key: PassKey, value: Arc<T>) {
+        if self.cache.enabled() {
+            self.fresh.push((name, key, value));
+        }
+    }
+
+    /// Sets a stat (counts that explain the cost).
+    pub fn stat(&mut self, name: &str, value: i64) {
+        self.stats.insert(name.to_owned(), value);
+    }
+
+    /// Reads `buffer`'s first `names.len()` u32 counters back into the stats of those names.
+    pub fn counters(&mut self, buffer: &wgpu::Buffer, names: &'static [&'static str]) {
+        self.counters.push((buffer.clone(), names));
+    }
+
+    /// Whether intermediate images were asked for.
+    pub fn wants_intermediates(&self) -> bool {
+        self.want_intermediates
+    }
+
+    /// Reads an intermediate image back (when they were asked for).
+    pub fn intermediate(&mut self, image: Intermediate) {
+        if self.want_intermediates {
+            self.intermediates.push(image);
+        }
+    }
+
+    pub(crate) fn into_record(self) -> FrameRecord<'r> {
+        let mut held = self.ctx.held.into_inner();
+        held.push(self.ctx.gbuffer);
+        if let Some(vertices) = self.ctx.vertices.into_inner() {
+            held.push(vertices);
+        }
+        FrameRecord {
+            profiler: self.profiler,
+            fresh: self.fresh,
+            reused: self.reused,
+            stats: self.stats,
+            counters: self.counters,
+            intermediates: self.intermediates,
+            held,
+        }
+    }
+}
