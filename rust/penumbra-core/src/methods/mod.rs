@@ -13,6 +13,7 @@ use crate::frame::Frame;
 use crate::gpu::pool::{PooledTexture, ResourcePool};
 use crate::pass_cache::CachedPass;
 
+pub mod adaptive;
 pub mod hard;
 pub mod params;
 pub mod pcf;
@@ -116,6 +117,7 @@ pub static REGISTRY: &[Registered] = &[
     entry::<pcf::PercentageCloserFiltering>(),
     entry::<pcss::PercentageCloserSoftShadows>(),
     entry::<reference::ReferenceShadows>(),
+    entry::<adaptive::AdaptiveShadows>(),
     entry::<pvm::PenumbraVolumeMaps>(),
     entry::<pvmf::PenumbraVolumeMaskFiltering>(),
 ];

@@ -17,15 +17,11 @@
 //!   weights (Herf 4.2, 4.5.1, as for a planar light). From a receiver off the
 //!   disk's axis the disk is an ellipse, not the sphere's circle, so this
 //!   converges to a slightly different visibility (measured in the README).
-//! - `cap`: one stratified grid uniform over the cap of the sphere that any
-//!   point of the scene can see, weighted per receiver by solid angle as
-//!   `sphere` is: the domain method `adaptive` subdivides, so that
-//!   `n_samples = 289, sampling = "cap", jitter = False` is the paper's
-//!   ground truth of 17 x 17 regular samples (Schwarzler 4.1) and exactly
-//!   the full grid of `adaptive` at `max_depth = 4`.
-//!
-//! `jitter = False` puts each sample at the centre of its stratum: a
-//! regular grid.
+//! `jitter = False` puts the samples on a regular grid through the corners
+//! of the unit square (`i / (k - 1)`, the centre alone for one sample):
+//! with `sampling = "disk"` and `n_samples = 289` the paper's ground truth of
+//! 17 x 17 regular samples (Schwarzler 4.1), and exactly the full grid that
+//! method `adaptive` reaches at `max_depth = 4`.
 //!
 //! Each sample gets its own fitted shadow map and the shadow-map test of
 //! `hard`, accumulated (weighted sum and sum of weights) into one buffer
@@ -52,30 +48,28 @@ use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 pub enum LightSampling {
     Sphere,
     Disk,
-    Cap,
 }
 
 impl LightSampling {
-    pub const NAMES: [&'static str; 3] = ["sphere", "disk", "cap"];
+    pub const NAMES: [&'static str; 2] = ["sphere", "disk"];
 
     pub fn name(self) -> &'static str {
         match self {
             LightSampling::Sphere => "sphere",
             LightSampling::Disk => "disk",
-            LightSampling::Cap => "cap",
         }
     }
 
     fn parse(name: &str) -> Self {
         match name {
             "disk" => LightSampling::Disk,
-            "cap" => LightSampling::Cap,
             _ => LightSampling::Sphere,
         }
     }
 }
 
-/// Where each sample lies in its stratum: jittered (fixed by a seed) or at its centre.
+/// Where the samples lie: jittered in their strata (fixed by a seed), or
+/// on the regular grid through the square's corners.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Strata {
     Jittered(u64),
@@ -139,41 +133,28 @@ pub fn concentric_disk(u: DVec2) -> DVec2 {
 
 /// A stratified grid of at least `n` points in the unit square (Herf
 /// 4.5.1): `ceil(sqrt(n))` columns, as many rows as needed, each point
-/// jittered in its cell or at its centre.
-fn jittered_grid(n: u32, strata: impl Into<Strata>) -> Vec<DVec2> {
+/// jittered in its cell; or, `Strata::Centred`, the regular grid of as many
+/// columns and rows through the square's corners (`i / (k - 1)`; one column
+/// or row sits at 1/2).
+pub fn jittered_grid(n: u32, strata: impl Into<Strata>) -> Vec<DVec2> {
     let columns = (n as f64).sqrt().ceil().max(1.0) as u32;
     let rows = n.div_ceil(columns);
     let mut rng = match strata.into() {
         Strata::Jittered(seed) => Some(SplitMix(seed ^ 0x005E_ED0F_9E37)),
         Strata::Centred => None,
     };
-    let mut offset = || rng.as_mut().map_or(0.5, SplitMix::next_f64);
+    // k > 1 points through both ends, i / (k - 1); a single one at the middle.
+    let regular = |i: u32, k: u32| if k > 1 { i as f64 / (k - 1) as f64 } else { 0.5 };
     let mut out = Vec::with_capacity((columns * rows) as usize);
     for j in 0..rows {
         for i in 0..columns {
-            let x = (i as f64 + offset()) / columns as f64;
-            let y = (j as f64 + offset()) / rows as f64;
-            out.push(DVec2::new(x, y));
+            out.push(match rng.as_mut() {
+                Some(rng) => DVec2::new((i as f64 + rng.next_f64()) / columns as f64, (j as f64 + rng.next_f64()) / rows as f64),
+                None => DVec2::new(regular(i, columns), regular(j, rows)),
+            });
         }
     }
     out
-}
-
-/// The point `u` of the unit square on the unit sphere's cap around `axis`
-/// (unit) of polar angle `acos(cos_max)`, `cos_max` in [-1, 0]: Shirley and
-/// Chiu's concentric map onto the unit disk, then Lambert's azimuthal map
-/// `z = 1 - rho^2 (1 - cos_max)`. Both preserve area, so a stratified grid
-/// of the square is stratified and uniform over the cap. Returns the unit
-/// normal (the point on the unit sphere).
-pub fn cap_normal(u: DVec2, axis: DVec3, cos_max: f64) -> DVec3 {
-    let (e1, e2) = axis.any_orthonormal_pair();
-    let d = concentric_disk(u);
-    let z = 1.0 - d.length_squared().min(1.0) * (1.0 - cos_max);
-    // sin(theta)^2 = (1 - z)(1 + z) = rho^2 (1 - cos_max)(1 + z), and d / rho
-    // is the azimuth's unit vector: the tangential part is d times
-    // sqrt((1 - cos_max)(1 + z)), with no division (finite at the pole).
-    let scale = ((1.0 - cos_max) * (1.0 + z)).max(0.0).sqrt();
-    (axis * z + (e1 * d.x + e2 * d.y) * scale).normalize()
 }
 
 /// One light sample: its position; for `sphere` sampling the sphere's outward
@@ -195,13 +176,14 @@ pub fn light_samples(center: DVec3, radius: f64, axis: DVec3, n: u32, strata: im
         return vec![center];
     }
     let (e1, e2) = axis.any_orthonormal_pair();
-    jittered_grid(n, strata)
-        .into_iter()
-        .map(|u| {
-            let d = concentric_disk(u) * radius;
-            center + e1 * d.x + e2 * d.y
-        })
-        .collect()
+    jittered_grid(n, strata).into_iter().map(|u| disk_point(center, radius, (e1, e2), u)).collect()
+}
+
+/// The point `u` of the unit square on the disk of `radius` around `center`
+/// spanned by the unit vectors `basis` (the concentric map).
+pub fn disk_point(center: DVec3, radius: f64, (e1, e2): (DVec3, DVec3), u: DVec2) -> DVec3 {
+    let d = concentric_disk(u) * radius;
+    center + e1 * d.x + e2 * d.y
 }
 
 /// Stratified jittered points on the light's sphere (`center`, `radius`) for
@@ -252,7 +234,14 @@ pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: 
             // |d| <= 1 up to rounding; the lift is unit length by construction.
             frame(d, (1.0 - d.length_squared()).max(0.0).sqrt(), 1.0)
         })
-        .chain(uniform.into_iter().map(|u| cap_normal(u, axis, cos_max)));
+        .chain(uniform.into_iter().map(|u| {
+            let d = concentric_disk(u);
+            let z = 1.0 - d.length_squared().min(1.0) * (1.0 - cos_max);
+            // sin(theta)^2 = (1 - z)(1 + z) = rho^2 (1 - cos_max)(1 + z), and d / rho
+            // is the azimuth's unit vector: the tangential part is d times
+            // sqrt((1 - cos_max)(1 + z)), with no division (finite at the pole).
+            frame(d, z, ((1.0 - cos_max) * (1.0 + z)).max(0.0).sqrt())
+        }));
     // 1 - cos_max >= 1 (the cap holds a hemisphere): p_u is finite.
     let p_u = 1.0 / (std::f64::consts::TAU * (1.0 - cos_max));
     normals
@@ -261,27 +250,6 @@ pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: 
             // count_u >= 1 and p_u > 0: the density is positive everywhere.
             let density = count_c * p_c + count_u * p_u;
             LightSample { position: center + normal * radius, normal: Some(normal), weight: 1.0 / density }
-        })
-        .collect()
-}
-
-/// Stratified points uniform over the cap of the light's sphere around
-/// `axis` of polar angle `acos(cos_max)` (`cap_normal`), one grid of at
-/// least `n` cells, with their normals and the inverse of their density
-/// (the shader multiplies it by the solid-angle factor, as for `sphere`).
-/// A radius of 0 gives the centre once.
-pub fn cap_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: u32, strata: impl Into<Strata>) -> Vec<LightSample> {
-    if radius == 0.0 {
-        return vec![LightSample { position: center, normal: None, weight: 1.0 }];
-    }
-    let cos_max = cos_max.clamp(-1.0, 0.0);
-    let grid = jittered_grid(n, strata);
-    // 1 - cos_max >= 1: the density (per unit area of the unit sphere) is finite.
-    let weight = std::f64::consts::TAU * (1.0 - cos_max) / grid.len() as f64;
-    grid.into_iter()
-        .map(|u| {
-            let normal = cap_normal(u, axis, cos_max);
-            LightSample { position: center + normal * radius, normal: Some(normal), weight }
         })
         .collect()
 }
@@ -343,9 +311,9 @@ impl Method for ReferenceShadows {
                 "sampling",
                 "sphere",
                 &LightSampling::NAMES,
-                "samples on the visible sphere (converges to the ground truth), on Herf's facing disk, or one grid uniform over the visible cap (adaptive's domain)",
+                "samples on the visible sphere (converges to the ground truth) or on Herf's facing disk",
             ),
-            ParamSpec::bool("jitter", true, "jitter each sample in its stratum (False: at its centre, a regular grid)"),
+            ParamSpec::bool("jitter", true, "jitter each sample in its stratum (False: a regular grid through the domain's corners, adaptive's full grid)"),
         ]);
         specs
     }
@@ -395,7 +363,6 @@ impl Method for ReferenceShadows {
                     points.into_iter().map(|position| LightSample { position, normal: None, weight }).collect()
                 }
                 LightSampling::Sphere => sphere_samples(center, radius, axis, cos_max, params.n_samples, strata),
-                LightSampling::Cap => cap_samples(center, radius, axis, cos_max, params.n_samples, strata),
             };
             let points: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
             let (w, h) = ctx.size;
