@@ -71,6 +71,7 @@ pub struct AdaptiveParams {
     pub tolerance: u64,
     pub comparison_scale: f64,
     pub pcf_2x2: bool,
+    pub weights: Weights,
 }
 
 /// A cell of the quadtree over the unit square, on the integer grid of the
@@ -175,10 +176,42 @@ impl Quadtree {
             }
         }
         let raw: Vec<f64> = depth.iter().map(|&d| 1.0 / ((1u64 << d) as f64 + 1.0).powi(2)).collect();
-        // At least the four root corners, each with a positive weight.
-        let total: f64 = raw.iter().sum();
-        raw.into_iter().map(|w| w / total).collect()
+        normalised(raw)
     }
+
+    /// Beyond the paper: each leaf cell's area shared among its four
+    /// corners (the trapezoid rule over the square, which the concentric
+    /// map carries to the disk's area), normalised to sum to 1.
+    pub fn area_weights(&self) -> Vec<f64> {
+        let mut raw = vec![0.0; self.points.len()];
+        for leaf in &self.leaves {
+            let area = 0.25f64.powi(leaf.level as i32);
+            for c in self.corners(*leaf) {
+                raw[self.index[&c]] += area / 4.0;
+            }
+        }
+        normalised(raw)
+    }
+}
+
+/// `raw` over its sum: every list here holds at least the four root
+/// corners, each with a positive weight, so the sum is positive.
+fn normalised(raw: Vec<f64>) -> Vec<f64> {
+    let total: f64 = raw.iter().sum();
+    raw.into_iter().map(|w| w / total).collect()
+}
+
+/// How the maps are weighted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Weights {
+    /// Eq. 3, normalised (3.4.1).
+    Eq3,
+    /// Each leaf cell's area shared among its corners.
+    Area,
+}
+
+impl Weights {
+    pub const NAMES: [&'static str; 2] = ["eq3", "area"];
 }
 
 /// Layout of `CellCompare` in `methods/adaptive/compare.wgsl`.
@@ -316,6 +349,12 @@ impl Method for AdaptiveShadows {
                 "comparison target's size as a fraction of the camera's image (3.3.2): smaller, fewer maps",
             ),
             ParamSpec::bool("pcf_2x2", false, "sample every map through the hardware's 2x2 bilinear comparison filter (3.4.3)"),
+            ParamSpec::choice(
+                "weights",
+                "eq3",
+                &Weights::NAMES,
+                "map weights: the paper's Eq. 3 by subdivision depth, or (beyond the paper) each leaf cell's area shared among its corners",
+            ),
         ]);
         specs
     }
@@ -327,6 +366,7 @@ impl Method for AdaptiveShadows {
             tolerance: p.int("tolerance") as u64,
             comparison_scale: p.float("comparison_scale"),
             pcf_2x2: p.bool("pcf_2x2"),
+            weights: if p.choice("weights") == "area" { Weights::Area } else { Weights::Eq3 },
         };
         let side = (1u64 << params.max_depth) + 1;
         let bytes = side * side * (params.shadow.map_size as u64).pow(2) * 4;
@@ -518,7 +558,10 @@ impl Method for AdaptiveShadows {
             }
             to_test = next;
         }
-        let weights = tree.weights();
+        let weights = match params.weights {
+            Weights::Eq3 => tree.weights(),
+            Weights::Area => tree.area_weights(),
+        };
         let evaluated: Vec<(&PooledTexture, ShadowTestUniform)> = maps
             .iter()
             .zip(&weights)
@@ -583,6 +626,10 @@ mod tests {
         let deep = tree.index_of((6, 6));
         assert!((w[far] / w[deep] - 81.0 / 9.0).abs() < 1e-9, "{} {}", w[far], w[deep]);
         assert_eq!(tree.leaves().len(), 4 + 3 + 3);
+        let a = tree.area_weights();
+        assert!((a.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        // The far root corner: a quarter of its level-1 leaf (1/4 of the square).
+        assert!((a[far] - 1.0 / 16.0).abs() < 1e-12, "{}", a[far]);
     }
 
     #[test]
