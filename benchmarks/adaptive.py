@@ -19,7 +19,7 @@ penumbra's share of the image. Then issue 18's target per scene: adaptive
 Last, a sweep of the light's radius on sphere_on_plane: the maps adaptive
 uses against the penumbra's pixel count (Figure 1 of the paper).
 
-    python benchmarks/adaptive.py [--size 96] [--spp 1024] [--repeats 2] [--meshes ../shared/meshes]
+    python benchmarks/adaptive.py [--size 96] [--spp 1024] [--repeats 2] [--meshes ../shared/meshes] [--scenes NAME ...]
 """
 
 from __future__ import annotations
@@ -72,6 +72,7 @@ def main() -> None:
     parser.add_argument("--spp", type=int, default=1024)
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--meshes", type=Path, default=MESHES)
+    parser.add_argument("--scenes", nargs="*", help="only these scenes (built-in names or real-mesh suite names)")
     args = parser.parse_args()
     renderer = penumbra.Renderer(pass_cache=False)
     scenes = {name: penumbra.scenes.get(name, width=args.size, height=args.size) for name in penumbra.scenes.names()}
@@ -80,6 +81,8 @@ def main() -> None:
         scenes.update({name: suite[name] for name in REAL if name in suite})
     else:
         print(f"(no real meshes: {args.meshes} is absent)")
+    if args.scenes:
+        scenes = {name: scene for name, scene in scenes.items() if name in args.scenes}
     targets = []
     print("| scene | method | maps | penumbra RMSE | ms |")
     print("|---|---|---:|---:|---:|")
