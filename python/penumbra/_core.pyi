@@ -75,4 +75,5 @@ class Renderer:
         method: str,
         params: dict[str, Any],
         intermediates: bool | None = None,
+        outputs: list[str] | None = None,
     ) -> dict[str, Any]: ...

@@ -141,9 +141,23 @@ def _run_chunk(chunk: _Chunk, renderer: Renderer | None = None) -> list[tuple[di
     renderer = renderer or process_renderer()
     out = []
     for task in chunk.tasks:
-        result = renderer.render(chunk.scenes[task.scene_name], task.method, camera=chunk.camera, **task.params)
+        result = renderer.render(
+            chunk.scenes[task.scene_name], task.method, camera=chunk.camera, outputs=_outputs_needed(chunk, task), **task.params
+        )
         out.append(_row(task, result, chunk))
     return out
+
+
+def _outputs_needed(chunk: _Chunk, task: _Task) -> list[str]:
+    """The images a configuration's row needs: those kept, and what the
+    metrics read (visibility, object ids, and radiance where the ground
+    truth has it). Nothing else is read back, and shading runs only for
+    radiance."""
+    needed = set(chunk.keep_images)
+    gt = chunk.ground_truth.get(task.scene_name)
+    if gt is not None:
+        needed |= {"visibility", "object_id"} | ({"radiance"} if "radiance" in gt.images else set())
+    return [name for name in IMAGES if name in needed]
 
 
 def _ground_truths(

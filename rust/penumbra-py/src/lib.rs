@@ -328,7 +328,8 @@ impl Renderer {
 
     /// Renders a `CoreScene` seen by a `CoreCamera`; returns a dict of
     /// images, timings and stats.
-    #[pyo3(signature = (scene, camera, method, params, intermediates = None))]
+    #[pyo3(signature = (scene, camera, method, params, intermediates = None, outputs = None))]
+    #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
         py: Python<'py>,
@@ -337,6 +338,7 @@ impl Renderer {
         method: &Bound<'py, PyAny>,
         params: &Bound<'py, PyAny>,
         intermediates: Option<&Bound<'py, PyAny>>,
+        outputs: Option<Vec<String>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let parameter_error: ErrorClass = ParameterError::new_err;
         let scene = self::scene(scene)?;
@@ -353,7 +355,11 @@ impl Renderer {
         }
         let config = core::MethodConfig::parse(&method, &parsed).map_err(to_py)?;
         let intermediates = intermediates.map(|i| strict_bool(i, "intermediates")).transpose()?.unwrap_or(false);
-        let options = core::RenderOptions { intermediates };
+        let outputs = match &outputs {
+            None => core::Outputs::ALL,
+            Some(names) => core::Outputs::parse(names.iter().map(String::as_str)).map_err(to_py)?,
+        };
+        let options = core::RenderOptions { intermediates, outputs };
         let inner = &self.inner;
         let result = py.detach(|| inner.render(&scene, &camera, &config, &options)).map_err(to_py)?;
 
