@@ -13,6 +13,7 @@ from penumbra._core import __version__
 from penumbra.errors import (
     CameraError,
     GpuError,
+    GpuFeatureError,
     GpuUnavailableError,
     GroundTruthError,
     InvalidInputError,
@@ -55,6 +56,7 @@ __all__ = [
     "ParameterError",
     "GpuUnavailableError",
     "GpuError",
+    "GpuFeatureError",
     "PenumbraIOError",
     "GroundTruthError",
 ]
