@@ -62,11 +62,12 @@ def _compare(args: argparse.Namespace) -> int:
 
     scene = _scene(args)
     params = dict(_param(p) for p in args.param)
-    c = compare(scene, args.method, spp=args.spp, cache_dir=args.cache_dir, out=args.output, **params)
+    c = compare(scene, args.method, spp=args.spp, cache_dir=args.cache_dir, out=args.output, truth=args.truth, **params)
     gt = c.ground_truth
+    truth = "raytraced truth" if gt.variant == "raytraced" else f"mitsuba {gt.variant}"
     print(f"scene {scene.name}: method {c.result.method} {json.dumps(c.result.params)}")
     print(f"penumbra: {c.result.total_ms:.1f} ms ({c.result.timing_source}); "
-          f"mitsuba {gt.variant}, {gt.spp} spp: " + ", ".join(f"{k} {v:.2f} s{' (cached)' if gt.cached[k] else ''}" for k, v in gt.seconds.items()))
+          f"{truth}, {gt.spp} spp: " + ", ".join(f"{k} {v:.2f} s{' (cached)' if gt.cached[k] else ''}" for k, v in gt.seconds.items()))
     print(summary(c.metrics))
     if args.json:
         with open(args.json, "w") as f:
@@ -96,9 +97,13 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("-o", "--output", default="penumbra.png", help="output file: .png (sRGB), .exr or .npy (linear)")
     render.set_defaults(run=_render)
 
-    comp = sub.add_parser("compare", help="render a method and Mitsuba ground truth, print the metrics, write a side-by-side PNG")
+    comp = sub.add_parser("compare", help="render a method and ground truth (Mitsuba or raytraced), print the metrics, write a side-by-side PNG")
     _scene_arguments(comp)
     comp.add_argument("--spp", type=int, default=256, help="ground-truth samples per pixel (default 256)")
+    comp.add_argument(
+        "--truth", choices=["mitsuba", "raytraced"], default="mitsuba",
+        help="the ground truth: Mitsuba (default) or the engine's raytraced method at --spp light samples (give it thousands)",
+    )
     comp.add_argument("--cache-dir", help="ground-truth cache folder (default $PENUMBRA_CACHE_DIR or ~/.cache/penumbra)")
     comp.add_argument("--json", help="also write the metrics to this JSON file")
     comp.add_argument("-o", "--output", default="compare.png", help="the comparison picture (PNG)")
@@ -116,7 +121,7 @@ def build_parser() -> argparse.ArgumentParser:
     listing.add_argument("--params", action="store_true", help="each method's paper and parameters")
     listing.add_argument("--markdown", action="store_true", help="the parameter tables of docs/parameters.md")
     listing.set_defaults(run=_methods)
-    sub.add_parser("info", help="show the GPU adapter in use").set_defaults(run=lambda a: print(json.dumps(adapter_info(), indent=2)) or 0)
+    sub.add_parser("info", help="show the GPU adapter in use (and whether it has ray queries, for raytraced)").set_defaults(run=lambda a: print(json.dumps(adapter_info(), indent=2)) or 0)
     return parser
 
 

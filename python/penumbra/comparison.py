@@ -1,5 +1,6 @@
-"""Render a method and Mitsuba ground truth of the same scene, measure, and
-draw them side by side: ``penumbra.compare(...)`` and ``penumbra compare``."""
+"""Render a method and ground truth of the same scene (Mitsuba, or the
+engine's ``raytraced`` at a high sample count), measure, and draw them side
+by side: ``penumbra.compare(...)`` and ``penumbra compare``."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from penumbra import metrics as metrics_module
-from penumbra.errors import SceneError
+from penumbra.errors import ParameterError, SceneError
 from penumbra.mitsuba import GroundTruth, ground_truth
 from penumbra.render import Renderer, RenderResult
 from penumbra.scene import Camera, Scene
@@ -39,17 +40,31 @@ def compare(
     noise_seed: int | None = 1,
     cache_dir: str | os.PathLike[str] | None = None,
     out: str | os.PathLike[str] | None = None,
+    truth: str = "mitsuba",
     **params: Any,
 ) -> Comparison:
-    """Renders ``scene`` with ``method`` (and its ``params``) and with Mitsuba
-    (radiance and visibility at ``spp``; with ``noise_seed`` a second ground
-    truth for the noise floor), computes every metric of :mod:`penumbra.metrics`,
-    and writes the side-by-side picture to ``out`` when given."""
+    """Renders ``scene`` with ``method`` (and its ``params``) and the ground
+    truth (radiance and visibility at ``spp`` samples per pixel; with
+    ``noise_seed`` a second ground truth for the noise floor), computes every
+    metric of :mod:`penumbra.metrics`, and writes the side-by-side picture to
+    ``out`` when given.
+
+    ``truth``: ``"mitsuba"`` (the independent default, cached under
+    ``cache_dir``) or ``"raytraced"``: the engine's own method ``raytraced`` at
+    ``spp`` light samples (:func:`penumbra.truth.raytraced_truth`; give it
+    thousands: 4096 for a noise floor near Mitsuba's at 1024), not cached."""
+    from penumbra.truth import TRUTHS, raytraced_truth
+
     if not isinstance(scene, Scene):
         raise SceneError(f"expected a penumbra.Scene, got {type(scene).__name__}")
+    if truth not in TRUTHS:
+        raise ParameterError(f"truth must be one of {list(TRUTHS)}, got {truth!r}")
     renderer = renderer or Renderer()
     result = renderer.render(scene, method, camera=camera, **params)
-    gt = ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
+    if truth == "raytraced":
+        gt = raytraced_truth(scene, camera, n_samples=spp, seed=seed, noise_seed=noise_seed, renderer=renderer)
+    else:
+        gt = ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
     comparison = Comparison(result, gt, metrics_module.compare(result, gt))
     if out is not None:
         comparison.save_figure(out)
@@ -80,7 +95,9 @@ def comparison_figure(c: Comparison, path: str | os.PathLike[str]) -> None:
     axes[0].set_title(f"penumbra: {c.result.method}\n{c.result.total_ms:.0f} ms", fontsize=9)
     axes[1].imshow(_srgb(g * exposure))
     gt_seconds = sum(c.ground_truth.seconds.values())
-    axes[1].set_title(f"Mitsuba 3 ({c.ground_truth.variant}, {c.ground_truth.spp} spp)\n{gt_seconds:.1f} s", fontsize=9)
+    truth = "penumbra raytraced" if c.ground_truth.variant == "raytraced" else f"Mitsuba 3 ({c.ground_truth.variant}"
+    truth = f"{truth}, {c.ground_truth.spp} spp)" if c.ground_truth.variant != "raytraced" else f"{truth} ({c.ground_truth.spp} samples)"
+    axes[1].set_title(f"{truth}\n{gt_seconds:.1f} s", fontsize=9)
     image = axes[2].imshow(diff, cmap="RdBu_r", vmin=-limit, vmax=limit)
     axes[2].set_title("visibility error (method - ground truth)\nred: too lit, blue: too dark", fontsize=9)
     fig.colorbar(image, ax=axes[2], shrink=0.8, label="visibility difference")

@@ -57,18 +57,19 @@ fn sample_weight(s: LightSample, p: vec3<f32>) -> f32 {
     return s.position.w * max(cos_s, 0.0) * ratio * ratio;
 }
 
-// Whether the segment from `origin` to `end` meets no triangle. The light
-// is not in the acceleration structure, so the segment ends on it.
-fn unoccluded(origin: vec3<f32>, end: vec3<f32>) -> bool {
+// Whether the segment from `origin` to `end` meets no triangle beyond
+// `t_min`. The light is not in the acceleration structure, so the segment
+// ends on it.
+fn unoccluded(origin: vec3<f32>, end: vec3<f32>, t_min: f32) -> bool {
     let d = end - origin;
     // The origin lies off the light (it is a receiver, offset by far less than
     // its distance to the light), so the length is positive.
     let len = length(d);
-    if (len <= 0.0) {
+    if (len <= t_min) {
         return true;
     }
     var rq: ray_query;
-    rayQueryInitialize(&rq, scene_bvh, RayDesc(RAY_FLAG_TERMINATE_ON_FIRST_HIT | RAY_FLAG_FORCE_OPAQUE, 0xFFu, 0.0, len, origin, d / len));
+    rayQueryInitialize(&rq, scene_bvh, RayDesc(RAY_FLAG_TERMINATE_ON_FIRST_HIT | RAY_FLAG_FORCE_OPAQUE, 0xFFu, t_min, len, origin, d / len));
     // Opaque triangles only: one proceed commits the first hit, if any.
     while (rayQueryProceed(&rq)) {
     }
@@ -85,8 +86,12 @@ struct Estimate {
 // [first, first + count).
 fn estimate(pixel: ScreenPixel, first: u32, count: u32) -> Estimate {
     // Offset along the normal, so that the surface the point lies on does not
-    // hide it (the G-buffer's position is within float rounding of it).
-    let origin = pixel.p + pixel.n * settings.light.w;
+    // hide it (the G-buffer's position is within float rounding of it), and
+    // hits closer than the offset ignored, so that neither does a surface
+    // meeting it at a corner (a wall's pixel at the floor can lie a rounding
+    // error below the floor, which an offset along the wall's normal keeps).
+    let eps = settings.light.w;
+    let origin = pixel.p + pixel.n * eps;
     var seen = 0.0;
     var total = 0.0;
     var lit = 0u;
@@ -99,7 +104,7 @@ fn estimate(pixel: ScreenPixel, first: u32, count: u32) -> Estimate {
         }
         total += w;
         // Samples below the surface's horizon count as hidden, as in the ground truth.
-        if (dot(pixel.n, s.position.xyz - pixel.p) > 0.0 && unoccluded(origin, s.position.xyz)) {
+        if (dot(pixel.n, s.position.xyz - pixel.p) > 0.0 && unoccluded(origin, s.position.xyz, eps)) {
             seen += w;
             lit += 1u;
         } else {
