@@ -192,7 +192,7 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
         gpu_struct!(pcf::PcfUniform => "PcfKernel" in "methods/pcf/visibility.wgsl" { kernel, samples, seed, nearest }),
         gpu_struct!(pcss::PcssUniform => "PcssSampling" in "methods/pcss/visibility.wgsl" { blocker_samples, filter_samples, seed, poisson }),
         gpu_struct!(reference::SampleWeightUniform => "SampleWeight" in "methods/reference/visibility.wgsl" { normal, light_center }),
-        gpu_struct!(raytraced::RaySettingsUniform => "RaySettings" in "methods/raytraced/visibility.wgsl" { light, counts }),
+        gpu_struct!(raytraced::RaySettingsUniform => "RaySettings" in "methods/raytraced/visibility.wgsl" { light, offset, counts }),
         gpu_struct!(raytraced::SampleUniform => "LightSample" in "methods/raytraced/visibility.wgsl" { position, normal }),
         gpu_struct!(pvmf::SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags }),
         gpu_struct!(pvmf::BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),

@@ -19,8 +19,10 @@
 //! hits closer than that offset are ignored (a wall's pixel where it meets
 //! the floor can lie a rounding error below the floor).
 //!
-//! Adaptive mode (`adaptive=True`): `adaptive_samples` rays per pixel first
-//! (a stratified set of their own); where they all agree (all reach the
+//! Adaptive mode (`adaptive=True`): `adaptive_samples` rays per pixel first,
+//! to a stratified set of points on the light's disk facing the pixel
+//! (`reference`'s disk sampling, placed per pixel, so that every pixel spreads
+//! them over the light as it sees it); where they all agree (all reach the
 //! light, or none does) and so do those of every pixel within
 //! `adaptive_radius` pixels, that estimate (1 or 0) stands; elsewhere the
 //! pixel takes the full `n_samples`, exactly as in plain mode. A penumbra
@@ -39,7 +41,7 @@ use crate::frame::Frame;
 use crate::gpu::context::{ray_queries_disabled, RAY_QUERY_ENV};
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
-use crate::methods::reference::{scene_sphere_samples, LightSample};
+use crate::methods::reference::{light_samples, scene_sphere_samples, LightSample};
 use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
@@ -68,9 +70,11 @@ pub const DEFAULT_RAY_OFFSET: f64 = 1e-5;
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct RaySettingsUniform {
-    /// The light's centre (xyz); w: the ray origins' offset in world units.
+    /// The light's centre (xyz) and radius (w).
     pub(crate) light: [f32; 4],
-    /// Samples in the full set, in the coarse set, the classification's radius, unused.
+    /// x: the ray origins' offset in world units.
+    pub(crate) offset: [f32; 4],
+    /// Samples in the full set, points in the coarse set, the classification's radius, unused.
     pub(crate) counts: [u32; 4],
 }
 
@@ -145,7 +149,7 @@ impl Method for RaytracedShadows {
             ParamSpec::int("n_samples", 256, 1, 65536, "shadow rays per pixel, one per light sample of reference's sphere sampling (rounded up to full stratified grids)"),
             ParamSpec::int("seed", 0, 0, i64::MAX, "fixes the samples' jitter"),
             ParamSpec::bool("adaptive", false, "a few rays per pixel first, the full count only where they disagree within adaptive_radius pixels"),
-            ParamSpec::int("adaptive_samples", 8, 1, 4096, "adaptive mode: rays per pixel of the first pass (rounded up as n_samples; fewer than n_samples)"),
+            ParamSpec::int("adaptive_samples", 16, 1, 4096, "adaptive mode: rays per pixel of the first pass, to the light's disk facing the pixel (rounded up to a full grid of ceil(sqrt(n)) columns; fewer than n_samples)"),
             ParamSpec::int("adaptive_radius", 2, 0, 16, "adaptive mode: a pixel takes the full count when any pixel this close disagreed"),
             ParamSpec::float(
                 "ray_offset",
@@ -216,12 +220,17 @@ impl Method for RaytracedShadows {
         let samples = scene_sphere_samples(center, radius, scene, params.n_samples, params.seed);
         // A point light is one ray per pixel: nothing to adapt.
         let adaptive = params.adaptive && radius > 0.0;
-        let coarse = if adaptive {
-            scene_sphere_samples(center, radius, scene, params.adaptive_samples, params.seed ^ COARSE_SEED)
+        // The first pass's points: a stratified set on the unit disk (the
+        // shader places it on the light's disk facing each pixel).
+        let coarse: Vec<SampleUniform> = if adaptive {
+            light_samples(DVec3::ZERO, 1.0, DVec3::Z, params.adaptive_samples, params.seed ^ COARSE_SEED)
+                .into_iter()
+                .map(|u| SampleUniform { position: [u.x as f32, u.y as f32, 0.0, 0.0], normal: [0.0; 4] })
+                .collect()
         } else {
             Vec::new()
         };
-        let uploaded: Vec<SampleUniform> = samples.iter().chain(&coarse).map(SampleUniform::from).collect();
+        let uploaded: Vec<SampleUniform> = samples.iter().map(SampleUniform::from).chain(coarse.iter().copied()).collect();
         let sample_buffer = ctx.buffer(
             "raytraced::samples",
             std::mem::size_of_val(uploaded.as_slice()) as u64,
@@ -237,7 +246,8 @@ impl Method for RaytracedShadows {
         let settings = ctx.parameters(
             "raytraced::settings",
             &RaySettingsUniform {
-                light: [c[0], c[1], c[2], offset as f32],
+                light: [c[0], c[1], c[2], ctx.light.radius_f32],
+                offset: [offset as f32, 0.0, 0.0, 0.0],
                 counts: [samples.len() as u32, coarse.len() as u32, params.adaptive_radius, 0],
             },
         );

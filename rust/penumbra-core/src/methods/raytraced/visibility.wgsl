@@ -13,10 +13,13 @@ enable wgpu_ray_query;
 // full set only where they disagree within a few pixels.
 
 struct RaySettings {
-    // The light's centre (xyz); w: the ray origins' offset along the normal, in world units.
+    // The light's centre (xyz) and radius (w).
     light: vec4<f32>,
-    // x: samples in the full set (at the start of `samples`); y: samples in the
-    // coarse set (after it); z: the classification's radius in pixels.
+    // x: the ray origins' offset along the normal, in world units.
+    offset: vec4<f32>,
+    // x: samples in the full set (at the start of `samples`); y: points in the
+    // coarse set (after it: unit-disk points, xy); z: the classification's
+    // radius in pixels.
     counts: vec4<u32>,
 };
 
@@ -31,7 +34,7 @@ struct LightSample {
 @group(0) @binding(2) var scene_bvh: acceleration_structure;
 @group(0) @binding(3) var<storage, read> settings: RaySettings;
 @group(0) @binding(4) var<storage, read> samples: array<LightSample>;
-// Adaptive mode, per pixel: the coarse estimate and 1 where its rays disagree.
+// Adaptive mode, per pixel: the first pass's estimate (0 or 1) and 1 where its rays disagree.
 @group(0) @binding(5) var<storage, read_write> coarse: array<vec2<f32>>;
 // [0]: pixels that took the full sample set; [1]: pixels that took the coarse set.
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
@@ -76,26 +79,18 @@ fn unoccluded(origin: vec3<f32>, end: vec3<f32>, t_min: f32) -> bool {
     return rayQueryGetCommittedIntersection(&rq).kind == RAY_QUERY_INTERSECTION_NONE;
 }
 
-struct Estimate {
-    visibility: f32,
-    // Some rays reached the light and some did not (blocked, or below the horizon).
-    mixed: bool,
-};
-
-// The visibility of the light from the pixel's surface point through samples
-// [first, first + count).
-fn estimate(pixel: ScreenPixel, first: u32, count: u32) -> Estimate {
+// The visibility of the light from the pixel's surface point through
+// samples [first, first + count) of the full set.
+fn estimate(pixel: ScreenPixel, first: u32, count: u32) -> f32 {
     // Offset along the normal, so that the surface the point lies on does not
     // hide it (the G-buffer's position is within float rounding of it), and
     // hits closer than the offset ignored, so that neither does a surface
     // meeting it at a corner (a wall's pixel at the floor can lie a rounding
     // error below the floor, which an offset along the wall's normal keeps).
-    let eps = settings.light.w;
+    let eps = settings.offset.x;
     let origin = pixel.p + pixel.n * eps;
     var seen = 0.0;
     var total = 0.0;
-    var lit = 0u;
-    var dark = 0u;
     for (var i = first; i < first + count; i++) {
         let s = samples[i];
         let w = sample_weight(s, pixel.p);
@@ -106,17 +101,11 @@ fn estimate(pixel: ScreenPixel, first: u32, count: u32) -> Estimate {
         // Samples below the surface's horizon count as hidden, as in the ground truth.
         if (dot(pixel.n, s.position.xyz - pixel.p) > 0.0 && unoccluded(origin, s.position.xyz, eps)) {
             seen += w;
-            lit += 1u;
-        } else {
-            dark += 1u;
         }
     }
-    var e: Estimate;
     // No sample faces the pixel (only possible with very few samples): the
     // light is treated as hidden rather than dividing by zero.
-    e.visibility = select(0.0, clamp(seen / total, 0.0, 1.0), total > 0.0);
-    e.mixed = lit > 0u && dark > 0u;
-    return e;
+    return select(0.0, clamp(seen / total, 0.0, 1.0), total > 0.0);
 }
 
 fn pixel_index(px: vec2<i32>) -> u32 {
@@ -132,13 +121,29 @@ fn trace(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     var v = 0.0;
     if (pixel.geometry) {
-        v = estimate(pixel, 0u, settings.counts.x).visibility;
+        v = estimate(pixel, 0u, settings.counts.x);
         atomicAdd(&counters[0], 1u);
     }
     textureStore(visibility_out, pixel.px, vec4<f32>(v, 0.0, 0.0, 0.0));
 }
 
-// Adaptive mode, first pass: the coarse sample set at every pixel.
+// An orthonormal pair perpendicular to the unit vector a (Duff et al. 2017,
+// "Building an orthonormal basis, revisited": no division by a small number).
+fn perpendicular_pair(a: vec3<f32>) -> mat2x3<f32> {
+    let sign = select(-1.0, 1.0, a.z >= 0.0);
+    let p = -1.0 / (sign + a.z);
+    let q = a.x * a.y * p;
+    return mat2x3<f32>(vec3<f32>(1.0 + sign * a.x * a.x * p, sign * q, -sign * a.x), vec3<f32>(q, sign + a.y * a.y * p, -a.y));
+}
+
+// Adaptive mode, first pass: a few rays from every pixel to points of the
+// light's disk facing it (the coarse set's unit-disk points, scaled by the
+// radius, around the direction to the centre), so that every pixel spreads
+// its first rays over the light as it sees it whatever the sphere sampling's
+// weights there (a receiver above a light inside a room sees its far side,
+// where few of the full set's samples lie). Stores 1 or 0 (some ray reached
+// the light) and whether the rays disagree (some reached it, some not:
+// blocked or below the horizon).
 @compute @workgroup_size(8, 8)
 fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
     let pixel = screen_pixel(id);
@@ -147,8 +152,23 @@ fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     var c = vec2<f32>(0.0, 0.0);
     if (pixel.geometry) {
-        let e = estimate(pixel, settings.counts.x, settings.counts.y);
-        c = vec2<f32>(e.visibility, select(0.0, 1.0, e.mixed));
+        let to_light = settings.light.xyz - pixel.p;
+        // Receivers lie outside the light (scene validation): the length is positive.
+        let axis = to_light / max(length(to_light), 1e-30);
+        let pair = perpendicular_pair(axis) * settings.light.w;
+        let eps = settings.offset.x;
+        let origin = pixel.p + pixel.n * eps;
+        var lit = 0u;
+        var dark = 0u;
+        for (var i = settings.counts.x; i < settings.counts.x + settings.counts.y; i++) {
+            let q = settings.light.xyz + pair * samples[i].position.xy;
+            if (dot(pixel.n, q - pixel.p) > 0.0 && unoccluded(origin, q, eps)) {
+                lit += 1u;
+            } else {
+                dark += 1u;
+            }
+        }
+        c = vec2<f32>(select(0.0, 1.0, lit > 0u), select(0.0, 1.0, lit > 0u && dark > 0u));
         atomicAdd(&counters[1], 1u);
     }
     coarse[pixel_index(pixel.px)] = c;
@@ -204,6 +224,5 @@ fn refine(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let index = refine_list[i];
     let pixel = screen_pixel(vec3<u32>(index % size.x, index / size.x, 0u));
-    let e = estimate(pixel, 0u, settings.counts.x);
-    textureStore(visibility_out, pixel.px, vec4<f32>(e.visibility, 0.0, 0.0, 0.0));
+    textureStore(visibility_out, pixel.px, vec4<f32>(estimate(pixel, 0u, settings.counts.x), 0.0, 0.0, 0.0));
 }
