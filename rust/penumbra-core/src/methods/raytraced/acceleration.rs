@@ -59,31 +59,37 @@ pub fn instance_transform(mesh: &Mesh) -> [f32; 12] {
     [r0.x, r0.y, r0.z, r0.w, r1.x, r1.y, r1.z, r1.w, r2.x, r2.y, r2.z, r2.w]
 }
 
-struct BlasEntry {
+/// A cached BLAS (`B`: `wgpu::Blas`; the tests use a stand-in).
+struct BlasEntry<B> {
     key: u64,
-    blas: wgpu::Blas,
+    blas: B,
     bytes: u64,
     last_used: u64,
 }
 
-struct TlasEntry {
+struct TlasEntry<T> {
     key: Vec<u8>,
     blas_keys: Vec<u64>,
-    tlas: wgpu::Tlas,
+    tlas: T,
     /// Names the TLAS in the resource pool's bind-group cache.
     id: u64,
     bytes: u64,
     last_used: u64,
 }
 
-#[derive(Default)]
-struct Entries {
-    blas: Vec<BlasEntry>,
-    tlas: Vec<TlasEntry>,
+struct Entries<B = wgpu::Blas, T = wgpu::Tlas> {
+    blas: Vec<BlasEntry<B>>,
+    tlas: Vec<TlasEntry<T>>,
     clock: u64,
 }
 
-impl Entries {
+impl<B, T> Default for Entries<B, T> {
+    fn default() -> Self {
+        Self { blas: Vec::new(), tlas: Vec::new(), clock: 0 }
+    }
+}
+
+impl<B, T> Entries<B, T> {
     fn bytes(&self) -> u64 {
         self.blas.iter().map(|b| b.bytes).sum::<u64>() + self.tlas.iter().map(|t| t.bytes).sum::<u64>()
     }
@@ -362,6 +368,28 @@ mod tests {
         let mut flipped = a.clone();
         flipped.faces = vec![[0, 2, 1]];
         assert_ne!(mesh_key(&a), mesh_key(&flipped));
+    }
+
+    #[test]
+    fn the_cache_stays_within_its_budget_keeping_the_current_scene() {
+        let mut e: Entries<(), ()> = Entries::default();
+        for key in 0..5u64 {
+            e.blas.push(BlasEntry { key, blas: (), bytes: 100, last_used: key });
+        }
+        e.tlas.push(TlasEntry { key: vec![0], blas_keys: vec![0, 4], tlas: (), id: 0, bytes: 10, last_used: 0 });
+        e.tlas.push(TlasEntry { key: vec![1], blas_keys: vec![3, 4], tlas: (), id: 1, bytes: 10, last_used: 4 });
+        assert_eq!(e.bytes(), 520);
+        // 300 bytes: the least recently used BLASes go (0, then 1), never the
+        // current scene's (0 is kept while it is in use), and with them the
+        // TLASes that use them.
+        e.evict(&[0, 4], 300);
+        let keys: Vec<u64> = e.blas.iter().map(|b| b.key).collect();
+        assert!(e.bytes() <= 300, "{}", e.bytes());
+        assert!(keys.contains(&0) && keys.contains(&4) && !keys.contains(&1) && !keys.contains(&2), "{keys:?}");
+        assert_eq!(e.tlas.len(), 1, "the TLAS over BLAS 3 went with it");
+        // A budget below the current scene's own size keeps the scene.
+        e.evict(&[0, 4], 0);
+        assert_eq!(e.blas.iter().map(|b| b.key).collect::<Vec<_>>().len(), 2);
     }
 
     #[test]
