@@ -36,7 +36,8 @@ pub const ACCELERATION_BUDGET: u64 = 512 << 20;
 /// TLASes kept (the scenes rendered last).
 const TLAS_ENTRIES: usize = 4;
 
-/// The size assumed for a BLAS per triangle where the allocator reports none.
+/// The size assumed for a BLAS per triangle where the allocator reports none
+/// (lavapipe's report: 104 bytes per triangle, `benchmarks/raytraced_memory.py`).
 pub const ESTIMATED_BYTES_PER_TRIANGLE: u64 = 128;
 
 /// A mesh's content key: its object-space vertices (exact bits) and faces.
