@@ -21,7 +21,9 @@ IMAGES = ("radiance", "visibility", "depth", "normal", "position", "object_id")
 
 def adapter_info() -> dict[str, Any]:
     """The GPU adapter a renderer would use: name, backend, device type,
-    driver, whether it has timestamp queries and whether it is software.
+    driver, whether it has timestamp queries, whether it has ray queries
+    (``ray_queries``: method ``raytraced`` needs them; false also when
+    ``PENUMBRA_DISABLE_RAY_QUERY`` is set) and whether it is software.
 
     Raises :class:`~penumbra.errors.GpuUnavailableError` when there is none."""
     return _core.adapter_info()

@@ -25,6 +25,7 @@ pyo3::import_exception!(penumbra.errors, SceneError);
 pyo3::import_exception!(penumbra.errors, ParameterError);
 pyo3::import_exception!(penumbra.errors, GpuUnavailableError);
 pyo3::import_exception!(penumbra.errors, GpuError);
+pyo3::import_exception!(penumbra.errors, GpuFeatureError);
 pyo3::import_exception!(penumbra.errors, PenumbraIOError);
 pyo3::import_exception!(penumbra.errors, InternalError);
 
@@ -38,6 +39,7 @@ fn to_py(e: core::Error) -> PyErr {
         core::Error::InvalidScene(_) => SceneError::new_err(message),
         core::Error::InvalidParameter(_) => ParameterError::new_err(message),
         core::Error::GpuUnavailable(_) => GpuUnavailableError::new_err(message),
+        core::Error::MissingFeature(_) => GpuFeatureError::new_err(message),
         core::Error::Gpu(_) => GpuError::new_err(message),
         core::Error::Io(_) => PenumbraIOError::new_err(message),
     }
@@ -235,6 +237,7 @@ fn summary_dict<'py>(py: Python<'py>, s: &core::AdapterSummary) -> PyResult<Boun
     d.set_item("driver", &s.driver)?;
     d.set_item("driver_info", &s.driver_info)?;
     d.set_item("timestamp_queries", s.timestamp_queries)?;
+    d.set_item("ray_queries", s.ray_queries)?;
     d.set_item("is_software", s.is_software)?;
     Ok(d)
 }
@@ -490,6 +493,7 @@ mod _core {
         m.add("ParameterError", super::ParameterError::type_object(py))?;
         m.add("GpuUnavailableError", super::GpuUnavailableError::type_object(py))?;
         m.add("GpuError", super::GpuError::type_object(py))?;
+        m.add("GpuFeatureError", super::GpuFeatureError::type_object(py))?;
         m.add("PenumbraIOError", super::PenumbraIOError::type_object(py))?;
         m.add("InternalError", super::InternalError::type_object(py))?;
         Ok(())

@@ -37,6 +37,7 @@ use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
+use crate::scene::PreparedScene;
 
 /// Where the light samples lie (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -258,6 +259,26 @@ pub fn visible_cap_cos_of(center: DVec3, radius: f64, axis: DVec3, distance: f64
     sphere.max(-sin_max)
 }
 
+/// The unit direction from the light's centre to the centre of the scene's
+/// bounding box (straight down when they coincide): the axis the samples
+/// are placed around.
+pub fn scene_axis(center: DVec3, scene: &PreparedScene) -> DVec3 {
+    let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
+    (scene_center - center).try_normalize().unwrap_or(DVec3::NEG_Y)
+}
+
+/// [`sphere_samples`] of the light (`center`, `radius`) for the receivers of
+/// `scene`: around [`scene_axis`], over the cap [`visible_cap_cos_of`] gives
+/// for the scene's corners. Shared by `reference` and `raytraced`.
+pub fn scene_sphere_samples(center: DVec3, radius: f64, scene: &PreparedScene, n: u32, seed: u64) -> Vec<LightSample> {
+    let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
+    let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
+    let axis = scene_axis(center, scene);
+    let corners = scene.meshes.iter().flat_map(|m| m.vertices.iter().copied());
+    let cos_max = visible_cap_cos_of(center, radius, axis, (scene_center - center).length(), bound, corners);
+    sphere_samples(center, radius, axis, cos_max, n, seed)
+}
+
 /// Layout of `SampleWeight` in `methods/reference/visibility.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -327,21 +348,13 @@ impl Method for ReferenceShadows {
         let used = frame.pass("light_samples", |ctx, encoder, timestamps| -> Result<(usize, usize, usize)> {
             let (center, radius) = (ctx.light.center, ctx.light.radius);
             let scene = ctx.prepared;
-            let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
-            let offset = scene_center - center;
-            let axis = offset.try_normalize().unwrap_or(DVec3::NEG_Y);
             let samples = match params.sampling {
                 LightSampling::Disk => {
-                    let points = light_samples(center, radius, axis, params.n_samples, params.seed);
+                    let points = light_samples(center, radius, scene_axis(center, scene), params.n_samples, params.seed);
                     let weight = 1.0 / points.len() as f64;
                     points.into_iter().map(|position| LightSample { position, normal: None, weight }).collect()
                 }
-                LightSampling::Sphere => {
-                    let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
-                    let corners = scene.meshes.iter().flat_map(|m| m.vertices.iter().copied());
-                    let cos_max = visible_cap_cos_of(center, radius, axis, offset.length(), bound, corners);
-                    sphere_samples(center, radius, axis, cos_max, params.n_samples, params.seed)
-                }
+                LightSampling::Sphere => scene_sphere_samples(center, radius, scene, params.n_samples, params.seed),
             };
             let points: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
             let (w, h) = ctx.size;
