@@ -19,5 +19,5 @@ pub mod topology;
 pub use error::{Error, Result};
 pub use gpu::{adapter_summary, AdapterSummary, TimingMode, TimingSource, Timings};
 pub use methods::{methods, MethodConfig, ParamKind, ParamSpec, ParamValue, REGISTRY};
-pub use renderer::{Image, ImageData, RenderOptions, RenderResult, Renderer};
+pub use renderer::{Image, ImageData, Outputs, RenderOptions, RenderResult, Renderer, OUTPUTS};
 pub use scene::{Camera, Mesh, Scene, SphereLight};

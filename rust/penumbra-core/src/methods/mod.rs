@@ -20,6 +20,7 @@ pub mod pcf;
 pub mod pcss;
 pub mod pvm;
 pub mod pvmf;
+pub mod raytraced;
 pub mod reference;
 
 pub use params::{ParamKind, ParamSet, ParamSpec, ParamValue};
@@ -120,6 +121,7 @@ pub static REGISTRY: &[Registered] = &[
     entry::<adaptive::AdaptiveShadows>(),
     entry::<pvm::PenumbraVolumeMaps>(),
     entry::<pvmf::PenumbraVolumeMaskFiltering>(),
+    entry::<raytraced::RaytracedShadows>(),
 ];
 
 /// Every method name SPEC section 4 defines, in its order.

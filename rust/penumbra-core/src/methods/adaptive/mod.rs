@@ -37,7 +37,7 @@ use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
 use crate::gpu::PassTimestamps;
 use crate::light_frustum::{light_sample_error, LightProjection};
-use crate::methods::reference::{disk_point, scene_cap};
+use crate::methods::reference::{disk_point, scene_axis};
 use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::passes::samplers::Filter;
 use crate::passes::screen::ScreenPass;
@@ -438,7 +438,7 @@ impl Method for AdaptiveShadows {
             return Ok(MethodOutput { visibility });
         }
         let (center, radius) = (frame.ctx.light.center, frame.ctx.light.radius);
-        let (axis, _) = scene_cap(frame.ctx.prepared, center);
+        let axis = scene_axis(center, frame.ctx.prepared);
         let basis = axis.any_orthonormal_pair();
         let (w, h) = frame.ctx.size;
         let target = (((w as f64 * params.comparison_scale).round() as u32).max(1), ((h as f64 * params.comparison_scale).round() as u32).max(1));
