@@ -217,12 +217,6 @@ impl<'r> FrameContext<'r> {
         self.texture_of(label, TextureKey { size: (map_size, map_size), format, usage, layers })
     }
 
-    /// A pooled 2D array texture of `layers` layers (bound as an array
-    /// even with one layer), in use until the frame ends.
-    pub fn layered_texture(&self, label: &str, size: (u32, u32), layers: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> PooledTexture {
-        self.texture_of(label, TextureKey { size, format, usage, layers: layers.max(1) })
-    }
-
     fn texture_of(&self, label: &str, key: TextureKey) -> PooledTexture {
         let texture = self.pool.texture(self.device, label, key);
         self.hold(&texture);

@@ -38,20 +38,6 @@ pub fn storage_texture(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindG
     }
 }
 
-/// A write-only storage texture array (`texture_storage_2d_array`).
-pub fn storage_texture_array(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::WriteOnly,
-            format,
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-        },
-        count: None,
-    }
-}
-
 /// A comparison sampler (`sampler_comparison`), for percentage-closer taps.
 pub fn comparison_sampler(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {

@@ -82,7 +82,7 @@ fn pcf_tap(t: ShadowTest, map: texture_depth_2d_array, cmp: sampler_comparison, 
     // (cleared to the far plane, 1) passes.
     let depth = plane_depth(t, r, c) * layer_depth_scale(ls, r.layer, c, m.layer);
     let reference = min((depth - r.bias) / ls.depth.y, 1.0);
-    return textureSampleCompareLevel(map, cmp, m.coords / ls.depth.z, map_layer(ls, m.layer), reference);
+    return textureSampleCompareLevel(map, cmp, m.coords / ls.depth.z, m.layer, reference);
 }
 
 // PCG hash (O'Neill; the "pcg" of Jarzynski and Olano 2020).

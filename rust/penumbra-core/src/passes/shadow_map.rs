@@ -145,33 +145,12 @@ impl ShadowMapPass {
         projection: &LightProjection,
         depth: MapDepth,
         timestamps: Option<PassTimestamps<'_>>,
-        parts: (bool, bool),
-    ) {
-        self.record_into(ctx, encoder, map, None, projection, depth, timestamps, parts);
-    }
-
-    /// [`Self::record`] into a texture array that holds the maps of several
-    /// light points: `packed_from` = Some(first) stores only the faces
-    /// rendered, in face order, from array layer `first` on (what
-    /// [`LightSpaceUniform::packed_at`] tells the shaders); None renders face
-    /// i into layer i.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_into(
-        &self,
-        ctx: &FrameContext<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        map: &PooledTexture,
-        packed_from: Option<u32>,
-        projection: &LightProjection,
-        depth: MapDepth,
-        timestamps: Option<PassTimestamps<'_>>,
         (first, last): (bool, bool),
     ) {
         let faces: Vec<(u32, &LightFrustum)> = projection.active_layers().collect();
         for (k, (layer, frustum)) in faces.iter().enumerate() {
             let (first, last) = (first && k == 0, last && k + 1 == faces.len());
-            let target = packed_from.map_or(*layer, |from| from + k as u32);
-            self.record_face(ctx, encoder, map, target, frustum, depth, timestamps, (first, last));
+            self.record_face(ctx, encoder, map, *layer, frustum, depth, timestamps, (first, last));
         }
     }
 
@@ -330,14 +309,5 @@ impl LightSpaceUniform {
             depth: [face.near, face.far, map_size as f32, layers],
             faces: [projection.active, 0, 0, 0],
         }
-    }
-
-    /// The same, for a map stored packed in a shared texture array from
-    /// layer `first` on: only its rendered faces, in face order
-    /// (`ShadowMapPass::record_into`; `map_layer` in `light_space.wgsl`).
-    pub fn packed_at(mut self, first: u32) -> Self {
-        self.faces[1] = first;
-        self.faces[2] = 1;
-        self
     }
 }

@@ -49,7 +49,7 @@ fn map_point_depth(ls: LightSpace, map: texture_depth_2d_array, m: MapPoint) -> 
     if (!layer_active(ls, m.layer)) {
         return ls.depth.y;
     }
-    return textureLoad(map, map_texel(textureDimensions(map), m), map_layer(ls, m.layer), 0) * ls.depth.y;
+    return textureLoad(map, map_texel(textureDimensions(map), m), m.layer, 0) * ls.depth.y;
 }
 
 // World-unit depth stored in a linear-depth map at the texel over `q`.
@@ -86,7 +86,7 @@ fn shadow_test_visibility_filtered(t: ShadowTest, map: texture_depth_2d_array, c
     }
     // Maps store depth / far; beyond the far plane only drawn texels hide.
     let reference = min(r.w / ls.depth.y, 1.0);
-    return textureSampleCompareLevel(map, cmp, m.coords / ls.depth.z, map_layer(ls, m.layer), reference);
+    return textureSampleCompareLevel(map, cmp, m.coords / ls.depth.z, m.layer, reference);
 }
 
 // Cournia Eq. 4.1 and 4.2: the fraction of a disk of radius r > 0 whose

@@ -16,10 +16,7 @@ struct LightSpace {
     window: vec4<f32>,
     // near, far, map size in texels, layers (1: a frustum; 6: cube faces).
     depth: vec4<f32>,
-    // x: the layers rendered (bit i: layer i); y: the array layer where the
-    // map starts; z: 1 when only the rendered layers are stored, in order
-    // (maps of several light points sharing one texture array, as method
-    // `adaptive` keeps them), 0 when layer i is array layer y + i; w unused.
+    // x: the layers rendered (bit i: layer i); y, z, w unused.
     faces: vec4<u32>,
 };
 
@@ -68,16 +65,6 @@ fn cube_face_of(d: vec3<f32>) -> i32 {
 // Whether a layer was rendered (cube faces that see no geometry are not).
 fn layer_active(ls: LightSpace, layer: i32) -> bool {
     return (ls.faces.x & (1u << u32(layer))) != 0u;
-}
-
-// The texture-array layer that holds `layer` of this projection's map: the
-// layer itself for a map of its own (y = z = 0).
-fn map_layer(ls: LightSpace, layer: i32) -> i32 {
-    if (ls.faces.z == 0u) {
-        return i32(ls.faces.y) + layer;
-    }
-    // Only rendered layers are stored: count those before this one.
-    return i32(ls.faces.y + countOneBits(ls.faces.x & ((1u << u32(layer)) - 1u)));
 }
 
 // The layer whose map holds `p`.

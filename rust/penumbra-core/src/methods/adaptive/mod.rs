@@ -623,7 +623,7 @@ mod tests {
         // Raw weights: the far root corner only touches a level-1 leaf (1/9),
         // the centre of the deepest split only level-3 leaves (1/81).
         let far = tree.index_of((8, 8));
-        let deep = tree.index_of((6, 6));
+        let deep = tree.index_of((3, 3));
         assert!((w[far] / w[deep] - 81.0 / 9.0).abs() < 1e-9, "{} {}", w[far], w[deep]);
         assert_eq!(tree.leaves().len(), 4 + 3 + 3);
         let a = tree.area_weights();

@@ -105,7 +105,7 @@ pub struct ReferenceParams {
 
 /// SplitMix64: a small, well-mixed generator; the samples only need to be
 /// deterministic for a seed and uncorrelated across cells.
-pub(crate) struct SplitMix(u64);
+struct SplitMix(u64);
 
 impl SplitMix {
     fn next_f64(&mut self) -> f64 {
@@ -119,7 +119,7 @@ impl SplitMix {
 
 /// Shirley and Chiu's concentric map from the unit square to the unit disk:
 /// area-preserving, so a stratified square stays stratified on the disk.
-pub fn concentric_disk(u: DVec2) -> DVec2 {
+fn concentric_disk(u: DVec2) -> DVec2 {
     let a = 2.0 * u - DVec2::ONE;
     if a == DVec2::ZERO {
         return DVec2::ZERO;
