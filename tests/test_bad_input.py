@@ -256,6 +256,7 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     # Item 6: reference's refusal (with one frustum per sample, as every method's was before
     # cube maps) says which sample and what to do.
     ("reference_sample_outside_one_frustum", render([ground_slab()], light=penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), method="reference", n_samples=16, map_size=256, projection="frustum"), SceneError, ["method 'reference'", "light sample", " of ", "degrees off", "projection='auto'", "smaller radius"]),
+    ("adaptive_sample_outside_one_frustum", render([ground_slab()], light=penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), method="adaptive", max_depth=1, map_size=256, projection="frustum"), SceneError, ["method 'adaptive'", "light sample", " of 9", "degrees off", "projection='auto'", "smaller radius"]),
     # Item 8: light attributes replaced after construction are checked again.
     ("light_center_replaced_none", lambda r: r.render(light_replaced(center=None)), LightError, ["light center", "numeric"]),
     ("light_intensity_replaced_shape", lambda r: r.render(light_replaced(intensity=[1, 2])), LightError, ["light intensity", "shape (3)"]),
@@ -411,9 +412,11 @@ def test_the_scene_reference_refuses_renders_with_every_other_method(renderer: p
     (its refusal above); each remedy the message names works here."""
     scene = penumbra.Scene([ground_slab()], penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), CAMERA)
     for method in penumbra.methods():
-        # Every shadow-map method but reference (raytraced has no map).
-        if method != "reference" and "projection" in penumbra.method_info(method).defaults():
+        # Every shadow-map method but those with maps from points on the
+        # light, reference and adaptive (raytraced has no map).
+        if method not in ("reference", "adaptive") and "projection" in penumbra.method_info(method).defaults():
             renderer.render(scene, method, map_size=256, projection="frustum")
     renderer.render(scene, "reference", n_samples=16, map_size=256)  # projection="auto": cube faces
+    assert renderer.render(scene, "adaptive", max_depth=1, map_size=256).stats["cube_maps"] > 0
     renderer.render(scene.with_light(scene.light.with_radius(0.1)), "reference", n_samples=16, map_size=256, projection="frustum")
     renderer.render(scene.with_light(penumbra.SphereLight((0, 1.8, 0), 0.3, intensity=10)), "reference", n_samples=16, map_size=256, projection="frustum")
