@@ -48,6 +48,16 @@ def worker(sizes: list[int], repeats: int) -> dict[str, float]:
                 renderer.render(scene, method, **params)
                 times.append(time.perf_counter() - t)
             out[f"{method} {size}px ms"] = 1e3 * statistics.median(times)
+            if "map_size" in penumbra.method_info(method).defaults() and penumbra.method_info(method).param("map_size").choices:
+                # A build with map_size="auto" (issue 24): the same, sized to the image.
+                auto = {**params, "map_size": "auto"}
+                renderer.render(scene, method, **auto)
+                times = []
+                for _ in range(repeats):
+                    t = time.perf_counter()
+                    renderer.render(scene, method, **auto)
+                    times.append(time.perf_counter() - t)
+                out[f"{method} map_size=auto {size}px ms"] = 1e3 * statistics.median(times)
     cached = penumbra.Renderer(timing="cpu")
     scene = penumbra.scenes.get("sphere_on_plane", width=64, height=64)
     sweep = [("pvmf", {"n_blur": n}) for n in range(0, 24, 2)]
