@@ -39,7 +39,8 @@ class Param:
     """One parameter of a method, as the method declares it in the core: its
     name, ``type`` (``"bool"``, ``"int"``, ``"float"`` or ``"choice"``),
     default, accepted values (``minimum``/``maximum`` or ``choices``) and
-    a line of documentation."""
+    a line of documentation. An ``"int"`` with ``choices`` (``("auto",)``:
+    ``map_size``) also takes those names."""
 
     name: str
     type: str

@@ -6,6 +6,7 @@ pub mod frame;
 pub mod gpu;
 pub mod image_io;
 pub mod light_frustum;
+pub mod map_size;
 pub mod methods;
 pub mod occluders;
 pub mod pass_cache;

@@ -271,6 +271,19 @@ impl Renderer {
             frame.pass(GBUFFER.name, |ctx, encoder, ts| self.gbuffer.record(ctx, encoder, view, projection, ts))?;
             frame.fresh(GBUFFER.name, gbuffer_key, gbuffer);
         }
+        // map_size="auto" (the default): the size from the image, for the
+        // projection the method's maps use.
+        let resolved;
+        let method = match method.auto_map_size() {
+            Some(mode) => {
+                let projection = frame.ctx.projection(mode)?;
+                let map_size = crate::map_size::auto_map_size(&projection, camera, prepared, frame.ctx.max_texture_side());
+                resolved = method.with_map_size(map_size)?;
+                frame.stat("map_size_auto", 1);
+                &resolved
+            }
+            None => method,
+        };
         let output = self.method(method.index()).record(&mut frame, method.typed())?;
         // Shading only where radiance is asked for.
         let outputs = options.outputs;

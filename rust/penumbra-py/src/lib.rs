@@ -431,6 +431,13 @@ fn method_specs(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
                     p.set_item("minimum", min)?;
                     p.set_item("maximum", max)?;
                 }
+                core::ParamKind::IntOrAuto { min, max } => {
+                    // An integer parameter that also takes "auto".
+                    p.set_item("type", "int")?;
+                    p.set_item("minimum", min)?;
+                    p.set_item("maximum", max)?;
+                    p.set_item("choices", vec!["auto"])?;
+                }
                 core::ParamKind::Float { min, max, min_exclusive } => {
                     p.set_item("type", "float")?;
                     p.set_item("minimum", min)?;
