@@ -320,7 +320,13 @@ impl Method for AdaptiveShadows {
             .into_iter()
             .map(|s| {
                 if s.name == "map_size" {
-                    ParamSpec::int("map_size", 512, 16, 16384, "shadow-map resolution in texels per side, per light point (the paper's 512)")
+                    ParamSpec::int_or_auto(
+                        "map_size",
+                        512,
+                        16,
+                        16384,
+                        "shadow-map resolution in texels per side, per light point (the paper's 512); 'auto' as for hard",
+                    )
                 } else {
                     s
                 }
@@ -368,6 +374,8 @@ impl Method for AdaptiveShadows {
             pcf_2x2: p.bool("pcf_2x2"),
             weights: if p.choice("weights") == "area" { Weights::Area } else { Weights::Eq3 },
         };
+        // map_size 'auto' (0 here) is checked once the renderer resolves it
+        // and parses the parameters again.
         let side = (1u64 << params.max_depth) + 1;
         let bytes = side * side * (params.shadow.map_size as u64).pow(2) * 4;
         if bytes > MAP_BUDGET_BYTES {
