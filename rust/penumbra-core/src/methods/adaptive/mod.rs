@@ -255,8 +255,8 @@ pub struct AdaptiveShadows {
 }
 
 impl AdaptiveShadows {
-    /// Renders the maps of `points` (unit-square points) in the named pass
-    /// open in `encoder`.
+    /// The fitted projection of each light point of `positions` (the maps
+    /// `first + 1`.. of at most `total`, for the error's wording).
     fn fit_maps(ctx: &FrameContext<'_>, params: &AdaptiveParams, positions: &[DVec3], first: usize, total: usize) -> Result<Vec<LightProjection>> {
         let scene = ctx.prepared;
         let geometry: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
@@ -385,7 +385,7 @@ impl Method for AdaptiveShadows {
                 params.max_depth,
                 params.shadow.map_size,
                 side * side,
-                (params.shadow.map_size as u64).pow(2) * 4 >> 20,
+                ((params.shadow.map_size as u64).pow(2) * 4) >> 20,
                 bytes >> 30,
                 MAP_BUDGET_BYTES >> 30
             )));
@@ -638,6 +638,24 @@ mod tests {
         assert!((a.iter().sum::<f64>() - 1.0).abs() < 1e-12);
         // The far root corner: a quarter of its level-1 leaf (1/4 of the square).
         assert!((a[far] - 1.0 / 16.0).abs() < 1e-12, "{}", a[far]);
+    }
+
+    #[test]
+    fn the_full_grid_is_references_regular_grid() {
+        use crate::methods::reference::{jittered_grid, Strata};
+        for depth in 0..=4u32 {
+            let mut tree = Quadtree::new(depth);
+            let mut cells = vec![Quadtree::root()];
+            for _ in 0..depth {
+                cells = cells.into_iter().flat_map(|c| tree.split(c)).collect();
+            }
+            let mut ours: Vec<(u64, u64)> = tree.points().iter().map(|&p| tree.unit(p)).map(|u| (u.x.to_bits(), u.y.to_bits())).collect();
+            let side = (1u32 << depth) + 1;
+            let mut grid: Vec<(u64, u64)> = jittered_grid(side * side, Strata::Centred).iter().map(|u| (u.x.to_bits(), u.y.to_bits())).collect();
+            ours.sort_unstable();
+            grid.sort_unstable();
+            assert_eq!(ours, grid, "depth {depth}: bit for bit");
+        }
     }
 
     #[test]

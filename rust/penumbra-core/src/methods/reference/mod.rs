@@ -17,6 +17,7 @@
 //!   weights (Herf 4.2, 4.5.1, as for a planar light). From a receiver off the
 //!   disk's axis the disk is an ellipse, not the sphere's circle, so this
 //!   converges to a slightly different visibility (measured in the README).
+//!
 //! `jitter = False` puts the samples on a regular grid through the corners
 //! of the unit square (`i / (k - 1)`, the centre alone for one sample):
 //! with `sampling = "disk"` and `n_samples = 289` the paper's ground truth of
