@@ -13,6 +13,7 @@ use crate::frame::Frame;
 use crate::gpu::pool::{PooledTexture, ResourcePool};
 use crate::pass_cache::CachedPass;
 
+pub mod backprojection;
 pub mod hard;
 pub mod params;
 pub mod pcf;
@@ -118,6 +119,7 @@ pub static REGISTRY: &[Registered] = &[
     entry::<reference::ReferenceShadows>(),
     entry::<pvm::PenumbraVolumeMaps>(),
     entry::<pvmf::PenumbraVolumeMaskFiltering>(),
+    entry::<backprojection::SoftShadowBackprojection>(),
 ];
 
 /// Every method name SPEC section 4 defines, in its order.
