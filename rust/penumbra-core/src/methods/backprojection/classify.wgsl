@@ -23,7 +23,7 @@ struct PixelList {
 @group(0) @binding(9) var kernel_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(10) var level_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(11) var<storage, read_write> list: PixelList;
-@group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>, 18>;
+@group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>, 19>;
 
 // Pixel classes (the `backprojection_class` image).
 const BACKGROUND: f32 = 0.0;
@@ -40,6 +40,7 @@ const C_COMPUTED: u32 = 3u;
 const C_SKIPPED: u32 = 4u;
 const C_DISCONTINUITY: u32 = 5u;
 const C_CAPPED: u32 = 8u;
+const C_STEEP: u32 = 18u;
 const C_LEVELS: u32 = 9u;
 
 // 5.2: a 4x4 ordered-dither pattern (Bayer): the first 4 form a lattice of
@@ -122,26 +123,46 @@ fn bounds_level(h: f32) -> u32 {
 
 // The level the visibility pass works at, as a code: the level plus, in
 // [0, 1), the position of Eq. 3's lambda past it (d of the paper's listing);
-// 0.5 where no blending applies (a forced level).
-fn level_code(h0: f32, lambda: f32) -> vec2<f32> {
+// 0.5 where no blending applies (a forced level). y: 1 where the kernel cap
+// forced a coarser level, 2 where the receiver's slope forced a finer one.
+// `finest` is the finest level whose samples still tell the occluders at
+// z_occ from the receiver's own surface (see `classify`).
+fn level_code(h0: f32, lambda: f32, finest: f32) -> vec2<f32> {
     let top = f32(bp.levels - 1u);
+    let width = max(2.0 * h0, 1.0);
     // The finest level whose conservative kernel stays within max_kernel
-    // samples: bounds the work whatever Eq. 3 says (counted as capped).
-    let need = max(ceil(log2(max(2.0 * h0, 1.0) / bp.max_kernel)), 0.0);
-    if ((bp.flags & LIGHT_ADAPTIVE) == 0u) {
-        return vec2<f32>(min(need, top) + 0.5, select(0.0, 1.0, need > 0.0));
+    // samples: bounds the work whatever Eq. 3 says.
+    let need = max(ceil(log2(width / bp.max_kernel)), 0.0);
+    var lod = need;
+    var forced = select(0.0, 1.0, need > 0.0);
+    var blend = false;
+    if ((bp.flags & LIGHT_ADAPTIVE) != 0u) {
+        lod = max(floor(lambda), 0.0);
+        forced = 0.0;
+        blend = lambda >= 0.0;
+        if (lod < need) {
+            lod = need;
+            forced = 1.0;
+            blend = false;
+        }
     }
-    let lod = floor(lambda);
-    if (lod < need) {
-        return vec2<f32>(min(need, top) + 0.5, 1.0);
+    if (lod > finest) {
+        // Never finer than the level where the kernel spans MAX_FALLBACK caps.
+        let floor_level = max(ceil(log2(width / (MAX_FALLBACK * bp.max_kernel))), 0.0);
+        let limited = max(finest, floor_level);
+        if (limited < lod) {
+            lod = limited;
+            forced = 2.0;
+            blend = false;
+        }
     }
     if (lod >= top) {
-        return vec2<f32>(top + 0.5, 0.0);
+        return vec2<f32>(top + 0.5, forced);
     }
-    if (lod < 0.0) {
-        return vec2<f32>(0.5, 0.0);
+    if (blend) {
+        return vec2<f32>(lambda, forced);
     }
-    return vec2<f32>(lambda, 0.0);
+    return vec2<f32>(lod + 0.5, forced);
 }
 
 fn classify(r: BpReceiver) -> Classified {
@@ -223,10 +244,22 @@ fn classify(r: BpReceiver) -> Classified {
     // Eq. 3: lambda = log2(w~_k / t_k), w~_k the kernel of z_occ.
     let smooth_width = 2.0 * kernel_half(r, z_occ) / KERNEL_SLACK;
     let lambda = log2(max(smooth_width, 1e-20) / bp.t_k);
-    let code = level_code(h, lambda);
+    // A coarse sample occludes only below the receiver's plane's nearest
+    // point over its footprint (`occludes`), which lies z_p^2 |grad(1/z)| 2^(l-1)
+    // nearer the light than at its centre: a receiver steep in the map (a
+    // floor seen edge-on from a cube face) would hide occluders standing
+    // (z_p - z_occ) above it from every level where that exceeds half the gap.
+    let steep = abs(r.inv_grad.x) + abs(r.inv_grad.y);
+    var finest = 1e9;
+    if (steep > 0.0) {
+        finest = floor(log2(max(0.5 * (r.depth - z_occ) / (r.depth * r.depth * steep), 1e-30)));
+    }
+    let code = level_code(h, lambda, finest);
     out.level = code.x;
-    if (code.y > 0.0) {
+    if (code.y == 1.0) {
         atomicAdd(&counters[C_CAPPED], 1u);
+    } else if (code.y == 2.0) {
+        atomicAdd(&counters[C_STEEP], 1u);
     }
     return out;
 }

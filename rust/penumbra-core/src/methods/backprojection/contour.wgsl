@@ -56,6 +56,10 @@ const KERNEL_SLACK: f32 = 1.05;
 // samples wider. (Edges lie inside their block's cell, and every cell
 // meeting the kernel is read.)
 const KERNEL_MARGIN: f32 = 0.5;
+// How much finer than the kernel cap allows a level may be (the centre
+// test's fallback in visibility.wgsl, steep receivers in classify.wgsl):
+// while the kernel spans at most this many times the cap.
+const MAX_FALLBACK: f32 = 4.0;
 // Homogeneous weight below which a backprojected point is clipped: the part
 // of an edge no nearer the light than the receiver is (see `edge_term`).
 const MIN_W: f32 = 1e-5;
@@ -107,6 +111,10 @@ struct BpReceiver {
     ray0: vec3<f32>,
     ray_x: vec3<f32>,
     ray_y: vec3<f32>,
+    // The part along the axis of those rays, over d: a point at depth z on
+    // the ray through p' + dc lies 1 + z (toward . (1, dc)) of the way from
+    // the light's plane to the receiver (the w of `disk_point`).
+    toward: vec3<f32>,
 };
 
 fn bp_receiver(p: vec3<f32>, n: vec3<f32>) -> BpReceiver {
@@ -166,6 +174,7 @@ fn bp_receiver(p: vec3<f32>, n: vec3<f32>) -> BpReceiver {
     r.sec = length(ray0);
     r.texel1 = light_texel_size(ls, 1.0);
     r.ray0 = ray0;
+    r.toward = vec3<f32>(dot(ray0, r.axis), dot(ray_x, r.axis), dot(ray_y, r.axis)) / r.d;
     r.ray_x = ray_x;
     r.ray_y = ray_y;
     return r;
@@ -201,8 +210,17 @@ fn with_disk_frame(r_in: BpReceiver) -> BpReceiver {
 // (section 3), which makes every receiver sloped towards the light shadow
 // itself.
 fn occludes(r: BpReceiver, c: vec2<f32>, half: f32, z: f32) -> bool {
+    let dc = c - r.coords;
+    // Only what lies between the receiver and the light along the axis
+    // towards the light's centre can hide it (the layer's axis, which z is
+    // measured along, turns up to 55 degrees from it on cube faces): beyond,
+    // the line from the receiver leads away from the light, and a contour
+    // through such samples would not close once backprojected.
+    if (1.0 + z * (r.toward.x + r.toward.y * dc.x + r.toward.z * dc.y) <= 2.0 * MIN_W) {
+        return false;
+    }
     let spread = (abs(r.inv_grad.x) + abs(r.inv_grad.y)) * half;
-    let inv = r.inv0 + dot(r.inv_grad, c - r.coords);
+    let inv = r.inv0 + dot(r.inv_grad, dc);
     if (r.facing) {
         // Above the plane: z < 1 / inv, or any z where the ray never meets it.
         return below_threshold(r, z, inv + spread);

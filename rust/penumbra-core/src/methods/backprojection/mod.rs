@@ -136,7 +136,8 @@ pub struct PullPushUniform {
 /// pixels blended between two levels (5.1), pixels whose kernel forced a
 /// coarser level, computed penumbra pixels per level (7: 7 and up), and
 /// pixels computed at a finer level than chosen because the chosen level's
-/// centre test disagreed with the map's (`visibility.wgsl`).
+/// centre test disagreed with the map's (`visibility.wgsl`), and pixels
+/// whose receiver, steep in the map, forced a finer level (`classify.wgsl`).
 pub const COUNTER_NAMES: &[&str] = &[
     "lit_pixels",
     "umbra_pixels",
@@ -156,6 +157,7 @@ pub const COUNTER_NAMES: &[&str] = &[
     "level_6_pixels",
     "level_7_pixels",
     "level_fallbacks",
+    "steep_receivers",
 ];
 
 /// Sizes and places of the hierarchy's levels: level 0 is the map; level

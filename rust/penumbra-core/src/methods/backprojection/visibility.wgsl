@@ -17,14 +17,12 @@ struct PixelList {
 @group(0) @binding(7) var level_in: texture_2d<f32>;
 @group(0) @binding(8) var<storage, read> list: PixelList;
 @group(0) @binding(9) var visibility_out: texture_storage_2d<r32float, write>;
-@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>, 18>;
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>, 19>;
 
 const C_EDGES: u32 = 6u;
 const C_BLENDED: u32 = 7u;
 const C_FALLBACKS: u32 = 17u;
-// How far below the chosen level a pixel may fall (see `main`): while its
-// kernel stays within this many times the cap of the kernel's width.
-const MAX_FALLBACK: f32 = 4.0;
+
 
 @compute @workgroup_size(64)
 fn main(
@@ -53,9 +51,15 @@ fn main(
     // integral is off by the whole disk. Where the centre test of the chosen
     // level disagrees with level 0's, the level goes down until they agree
     // (within MAX_FALLBACK times the kernel cap), without blending.
+    // On a cube, a coarse sample beyond the face reads the neighbour face's
+    // texel holding its centre, whose footprint there is turned and
+    // stretched against the sample's: a kernel crossing a face edge goes
+    // down the same way.
     let inside0 = centre_inside(r, 0u);
     var fell = false;
-    while (lod > 0u && 2.0 * h0 / f32(1u << (lod - 1u)) <= MAX_FALLBACK * bp.max_kernel && centre_inside(r, lod) != inside0) {
+    let size = shadow.light_space.depth.z;
+    let crosses = is_cube(shadow.light_space) && (any(r.coords - h0 < vec2<f32>(0.0)) || any(r.coords + h0 > vec2<f32>(size)));
+    while (lod > 0u && 2.0 * h0 / f32(1u << (lod - 1u)) <= MAX_FALLBACK * bp.max_kernel && (crosses || centre_inside(r, lod) != inside0)) {
         lod -= 1u;
         fell = true;
     }
