@@ -22,6 +22,8 @@ struct PixelList {
 const C_EDGES: u32 = 6u;
 const C_BLENDED: u32 = 7u;
 const C_FALLBACKS: u32 = 17u;
+// Levels a kernel crossing a cube face's edge goes down (see `main`).
+const CROSSING_LEVELS: u32 = 2u;
 
 
 @compute @workgroup_size(64)
@@ -54,12 +56,13 @@ fn main(
     // On a cube, a coarse sample beyond the face reads the neighbour face's
     // texel holding its centre, whose footprint there is turned and
     // stretched against the sample's: a kernel crossing a face edge goes
-    // down the same way.
+    // down CROSSING_LEVELS levels the same way.
     let inside0 = centre_inside(r, 0u);
     var fell = false;
     let size = shadow.light_space.depth.z;
     let crosses = is_cube(shadow.light_space) && (any(r.coords - h0 < vec2<f32>(0.0)) || any(r.coords + h0 > vec2<f32>(size)));
-    while (lod > 0u && 2.0 * h0 / f32(1u << (lod - 1u)) <= MAX_FALLBACK * bp.max_kernel && (crosses || centre_inside(r, lod) != inside0)) {
+    let cross_level = select(lod, lod - min(lod, CROSSING_LEVELS), crosses);
+    while (lod > 0u && 2.0 * h0 / f32(1u << (lod - 1u)) <= MAX_FALLBACK * bp.max_kernel && (lod > cross_level || centre_inside(r, lod) != inside0)) {
         lod -= 1u;
         fell = true;
     }
