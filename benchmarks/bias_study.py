@@ -1,6 +1,8 @@
 """Shadow-map bias schemes of method `hard` against exact ray casting.
 
-For every built-in scene with a point light (radius 0), renders `hard` with
+For every built-in scene, and two thin closed plates (2 x t x 2 boxes at
+y = 0.5, t = 1e-4 and 1e-3: issue 22's case for `second_depth`), with a
+point light (radius 0), renders `hard` with
 each bias scheme and map size, casts a ray from every pixel's surface point
 to the light on the CPU, and counts the pixels where they disagree:
 - acne: shadowed by the method, lit in truth;
@@ -44,6 +46,14 @@ def exact_visibility(scene: penumbra.Scene, result: penumbra.RenderResult) -> np
     return exact
 
 
+def thin_plate(thickness: float, size: int) -> penumbra.Scene:
+    """A closed plate 2 x thickness x 2 at y = 0.5 over the ground slab, with
+    the default scene's point light and camera: its top face is lit."""
+    base = penumbra.scenes.get(width=size, height=size, light_radius=0.0)
+    plate = penumbra.scenes.box((0.0, 0.5, 0.0), (2.0, thickness, 2.0), name="plate")
+    return penumbra.Scene([penumbra.scenes.ground_slab(), plate], base.light, base.camera, name=f"thin_plate_{thickness:g}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--size", type=int, default=256)
@@ -53,8 +63,9 @@ def main() -> None:
     print(f"adapter: {renderer.adapter_info['name']}; image {args.size}x{args.size}; light radius 0\n")
     print("| scene | map_size | bias | acne | leak | acne on outline | leak on outline | geometry pixels |")
     print("|---|---|---|---|---|---|---|---|")
-    for name in penumbra.scenes.names():
-        scene = penumbra.scenes.get(name, width=args.size, height=args.size, light_radius=0.0)
+    scenes = [(n, penumbra.scenes.get(n, width=args.size, height=args.size, light_radius=0.0)) for n in penumbra.scenes.names()]
+    scenes += [(f"thin_plate t={t:g}", thin_plate(t, args.size)) for t in (1e-4, 1e-3)]
+    for name, scene in scenes:
         exact = None
         for map_size in args.map_sizes:
             for bias in ("slope", "second_depth", "midpoint", "none"):

@@ -21,6 +21,11 @@ CONFIGS: list[tuple[str, dict[str, Any]]] = [
     ("pcss", {}),
     ("pcss", {"sampling": "poisson"}),
     ("pvm", {}),
+    ("pvm", {"falloff": False}),
+    ("pvmf", {}),
+    # The settings docs/real_meshes.md recommends, with and without repair "distance".
+    ("pvmf", {"kernel": "disk", "n_blur": 0, "offsets": "radius", "umbra": "skip", "s_e": 0.02}),
+    ("pvmf", {"kernel": "disk", "n_blur": 0, "offsets": "radius", "umbra": "skip", "s_e": 0.02, "repairs": "hidden+horizon"}),
     ("reference", {"n_samples": 1024}),
 ]
 

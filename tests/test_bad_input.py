@@ -242,9 +242,10 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("pvmf_kernel_unknown", render(method="pvmf", kernel="hexagon"), ParameterError, ["kernel", "square", "disk"]),
     ("pvm_falloff_string", render(method="pvm", falloff="yes"), ParameterError, ["falloff", "bool"]),
     ("pvm_open_edges_unknown", render(method="pvm", open_edges="ignore"), ParameterError, ["open_edges", "silhouette"]),
-    ("pvm_open_caster", render(method="pvm"), MeshError, ["'quad'", "not closed", "open_edges='silhouette'"]),
-    ("pvm_non_manifold_caster", render([closed_box(), quad(faces=np.vstack([QUAD_F, QUAD_F]))], method="pvm", open_edges="silhouette"), MeshError, ["'quad'", "not a 2-manifold"]),
-    ("pvmf_open_caster", render(method="pvmf"), MeshError, ["not closed"]),
+    # Open and non-manifold casters render by default (docs/real_meshes.md); open_edges="error" refuses them.
+    ("pvm_open_caster", render(method="pvm", open_edges="error"), MeshError, ["'quad'", "not closed", "open_edges='silhouette'"]),
+    ("pvm_non_manifold_caster", render([closed_box(), quad(faces=np.vstack([QUAD_F, QUAD_F]))], method="pvm", open_edges="error"), MeshError, ["'quad'", "not a 2-manifold", "open_edges='silhouette'"]),
+    ("pvmf_open_caster", render(method="pvmf", open_edges="error"), MeshError, ["not closed"]),
     ("result_unknown_image", lambda r: render()(r).save("x.png", image="albedo"), ParameterError, ["albedo"]),
     ("write_into_missing_folder", lambda r: penumbra.write_image("no/such/dir/out.png", np.zeros((2, 2), np.float32)), penumbra.PenumbraIOError, ["no/such/dir/out.png"]),
     ("mesh_file_empty", lambda r: penumbra.scenes.from_mesh(empty_file()), MeshError, ["empty.obj"]),

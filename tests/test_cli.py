@@ -77,7 +77,7 @@ def test_render_mesh_file(tmp_path: Path) -> None:
         (["render", "--width", "8", "--height", "8", "-o", "no/such/dir/out.png"], "no/such/dir/out.png"),
         (["render", "--mesh", "empty.obj"], "empty.obj"),
         (["render", "--mesh", "."], "cannot read mesh file"),
-        (["render", "--mesh", "open.obj", "--method", "pvm", "--width", "8", "--height", "8"], "not closed"),
+        (["render", "--mesh", "open.obj", "--method", "pvm", "--param", "open_edges=error", "--width", "8", "--height", "8"], "not closed"),
         (["render", "--light-radius", "50", "--width", "8", "--height", "8"], "intersects"),
     ],
 )

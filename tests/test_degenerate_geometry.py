@@ -102,7 +102,9 @@ def touching_casters() -> penumbra.Scene:
 
 
 Error = tuple[type[Exception], list[str]]
-# Case -> (scene, decided error for the volume methods or None when they render).
+# Case -> (scene, the error the volume methods give with open_edges="error",
+# or None when they accept the mesh even then). With the default
+# open_edges="silhouette" every case renders (docs/real_meshes.md).
 CASES: dict[str, tuple[Callable[[], penumbra.Scene], Error | None]] = {
     "collinear_edges": (collinear_edges, None),
     "light_parallel_edges": (light_parallel_edges, None),
@@ -123,10 +125,9 @@ def test_degenerate_geometry_renders_or_raises_the_decided_error(renderer: penum
     s = build()
     if error is not None and method in VOLUME_METHODS:
         with pytest.raises(error[0]) as info:
-            renderer.render(s, method, **FAST[method])
+            renderer.render(s, method, open_edges="error", **FAST[method])
         for word in error[1]:
             assert word in str(info.value), f"{word!r} not in {info.value}"
-        return
     result = renderer.render(s, method, **FAST[method])
     check_images(result, f"{case}/{method}")
     if case == "vertex_with_four_silhouette_edges" and method == "pvm":

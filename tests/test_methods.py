@@ -41,7 +41,8 @@ def test_declarations_are_what_the_renderer_checks(renderer: penumbra.Renderer) 
                     renderer.render(scene, name, **{p.name: "no-such-choice"})
     with pytest.raises(penumbra.ParameterError, match="unknown or unimplemented method 'wedges'"):
         penumbra.method_info("wedges")
-    assert penumbra.method_info("pvmf").param("bias").default == "second_depth"
+    # pvmf defaults to slope where 5.5 uses second_depth (docs/real_meshes.md).
+    assert penumbra.method_info("pvmf").param("bias").default == "slope"
     with pytest.raises(penumbra.ParameterError, match="no parameter"):
         penumbra.method_info("hard").param("kernel")
 

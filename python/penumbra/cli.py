@@ -35,8 +35,9 @@ def _scene(args: argparse.Namespace, default_size: int | None = None) -> scenes.
     width = args.width if args.width is not None or args.height is not None else default_size
     height = args.height if args.width is not None or args.height is not None else default_size
     if args.mesh:
-        size = {k: v for k, v in (("width", width), ("height", height)) if v is not None}
-        scene = scenes.from_mesh(args.mesh, **size)
+        scene = scenes.from_mesh(args.mesh)
+        if scene.camera is not None and (width is not None or height is not None):
+            scene = scene.with_camera(scene.camera.with_size(width or scene.camera.width, height or scene.camera.height))
     else:
         scene = scenes.get(args.scene, width=width, height=height)
     if args.light_radius is not None:

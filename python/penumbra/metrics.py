@@ -23,6 +23,7 @@ __all__ = [
     "PENUMBRA_LOW",
     "PENUMBRA_HIGH",
     "penumbra_region",
+    "stray_pixels",
     "silhouette_band",
     "lit_mean",
     "rmse",
@@ -44,6 +45,23 @@ def _same_shape(a: np.ndarray, b: np.ndarray, what: str) -> None:
 def penumbra_region(gt_visibility: np.ndarray) -> np.ndarray:
     """Pixels whose ground-truth visibility is strictly inside (0.02, 0.98)."""
     return (gt_visibility > PENUMBRA_LOW) & (gt_visibility < PENUMBRA_HIGH)
+
+
+def stray_pixels(visibility: np.ndarray, gt_visibility: np.ndarray, geometry: np.ndarray | None = None) -> tuple[int, int]:
+    """Pixels a method gets grossly wrong outside the penumbra, and how many
+    could be: those fully lit in truth (visibility >= 0.98) that the method
+    darkens below 0.5, plus those in the umbra in truth (<= 0.02) that it
+    lights above 0.5; over the pixels fully lit or in umbra in truth (within
+    ``geometry``, e.g. ``object_id >= 0``, when given). Returns (stray, out of)."""
+    _same_shape(visibility, gt_visibility, "visibility")
+    v = np.asarray(visibility)
+    lit = gt_visibility >= PENUMBRA_HIGH
+    umbra = gt_visibility <= PENUMBRA_LOW
+    if geometry is not None:
+        lit &= geometry
+        umbra &= geometry
+    stray = (lit & (v < 0.5)) | (umbra & (v > 0.5))
+    return int(stray.sum()), int((lit | umbra).sum())
 
 
 def silhouette_band(object_id: np.ndarray) -> np.ndarray:

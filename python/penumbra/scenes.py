@@ -34,6 +34,10 @@ __all__ = [
     "sphere",
     "box",
     "from_mesh",
+    "SETUPS",
+    "CLOSED_MESHES",
+    "SUITE_SETUPS",
+    "real_mesh_suite",
     "load_mesh",
     "wide_floor",
     "cornell_box",
@@ -230,12 +234,56 @@ def _resting(path: str, size: float) -> Mesh:
     return Mesh(vertices, np.asarray(loaded.faces), albedo=0.7, object_id=1, name=str(path).rsplit("/", 1)[-1])
 
 
-def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5) -> Scene:
-    """A scene around a mesh file (anything trimesh reads): the mesh scaled to
-    a 2.5-unit bounding box, resting on the ground plane, with the default light and camera."""
-    mesh = _resting(path, 2.5)
-    camera = _camera().with_size(width, height)
+# The ways from_mesh places a mesh, its light and camera (see from_mesh).
+SETUPS = ("default", "close", "wide_floor")
+
+
+def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.5, setup: str = "default") -> Scene:
+    """A scene around a mesh file (anything trimesh reads), resting on a
+    closed ground slab; ``setup`` says how:
+
+    - ``"default"``: the mesh scaled to a 2.5-unit bounding box on the
+      10 x 10 ground slab, with the built-in scenes' light and camera.
+    - ``"close"``: the same scene seen from above, framed on the mesh and
+      its shadow (the view the real-mesh accuracy tests use).
+    - ``"wide_floor"``: the mesh scaled to 1.5 units on a 6 x 6 slab with
+      the light 3 units above the floor, seen from above the floor's front:
+      a floor wider than the light is high. The light stands over the
+      floor's middle, so every floor corner lies within 60 degrees of the
+      shadow map's axis and one frustum covers it (``wide_floor`` below
+      needs cube faces).
+    """
+    if setup not in SETUPS:
+        raise ParameterError(f"unknown setup {setup!r}; choose one of {list(SETUPS)}")
+    mesh = _resting(path, 1.5 if setup == "wide_floor" else 2.5)
+    if setup == "wide_floor":
+        light = SphereLight(center=(0.4, 3.0, 0.3), radius=light_radius, intensity=20.0)
+        camera = Camera(eye=(0.0, 4.0, 4.4), target=(-0.2, 0.0, -0.2), fov_y=55.0, width=width, height=height)
+        return Scene([ground_slab(half_size=3.0), mesh], light, camera, name=mesh.name)
+    if setup == "close":
+        camera = Camera(eye=(1.2, 6.5, 5.0), target=(-0.7, 0.4, -0.6), fov_y=50.0, width=width, height=height)
+    else:
+        camera = _camera().with_size(width, height)
     return Scene([ground_slab(), mesh], _light(light_radius), camera, name=mesh.name)
+
+
+# The closed 2-manifold meshes of ../shared/meshes (its SOURCES.md), which the
+# real-mesh accuracy suite and benchmarks/real_meshes.py render.
+CLOSED_MESHES = ("cube.obj", "spot.obj", "teapot-mcguire-closed.obj")
+# (setup, light radius) per real-mesh scene: two radii seen close, and the wide floor.
+SUITE_SETUPS = (("close", 0.3), ("close", 0.8), ("wide_floor", 0.3))
+
+
+def real_mesh_suite(folder: str, *, width: int = 160, height: int = 160, meshes: tuple[str, ...] = CLOSED_MESHES) -> dict[str, Scene]:
+    """The real-mesh scenes of the accuracy suite: every mesh of ``meshes``
+    (files in ``folder``) in every (setup, light radius) of ``SUITE_SETUPS``,
+    by name ``"<file> <setup> r=<radius>"``."""
+    out = {}
+    for mesh in meshes:
+        for setup, radius in SUITE_SETUPS:
+            scene = from_mesh(f"{folder}/{mesh}", width=width, height=height, light_radius=radius, setup=setup)
+            out[f"{mesh} {setup} r={radius}"] = scene
+    return out
 
 
 def wide_floor(path: str | None = None, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.3) -> Scene:

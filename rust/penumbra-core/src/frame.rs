@@ -73,6 +73,14 @@ impl Intermediate {
     }
 }
 
+/// A scene's triangles on the GPU, indexed (see [`crate::scene::PreparedScene`]).
+pub struct GeometryBuffers {
+    pub surface_vertices: PooledBuffer,
+    pub surface_indices: PooledBuffer,
+    pub positions: PooledBuffer,
+    pub position_indices: PooledBuffer,
+}
+
 /// What every pass of one render reads.
 pub struct FrameContext<'r> {
     pub device: &'r wgpu::Device,
@@ -90,8 +98,8 @@ pub struct FrameContext<'r> {
     pub gbuffer_key: PassKey,
     /// The geometry's hash as key bytes (zero when there is no pass cache).
     pub geometry: [u8; 8],
-    /// The triangle corners, uploaded on first use.
-    vertices: OnceCell<PooledBuffer>,
+    /// The scene's drawable geometry, uploaded on first use.
+    vertices: OnceCell<Arc<GeometryBuffers>>,
     /// Their positions, for projection fits.
     corner_positions: OnceCell<Vec<Vec3>>,
     /// The light centre's projections fitted so far, by mode.
@@ -157,20 +165,40 @@ impl<'r> FrameContext<'r> {
         Ok(fitted)
     }
 
-    /// The scene's triangle corners as a vertex buffer, and their count.
-    /// Uploaded only when a pass draws the geometry: not when the pass cache
-    /// supplies the G-buffer and the shadow map.
-    pub fn vertices(&self) -> (&wgpu::Buffer, u32) {
-        let buffer = self.vertices.get_or_init(|| {
-            let bytes: &[u8] = bytemuck::cast_slice(&self.prepared.corners);
-            let usage = wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST;
-            let buffer = self.buffer("frame::corners", (bytes.len() as u64).max(4), usage);
-            if !bytes.is_empty() {
-                self.queue.write_buffer(&buffer, 0, bytes);
-            }
-            buffer
-        });
-        (buffer, self.prepared.corners.len() as u32)
+    /// The triangles as the camera's G-buffer draws them: vertices
+    /// (`CornerVertex`), indices and the index count. Uploaded only when a
+    /// pass draws them: not when the pass cache supplies the G-buffer and the
+    /// shadow map.
+    pub fn surface(&self) -> (&wgpu::Buffer, &wgpu::Buffer, u32) {
+        let g = self.geometry_buffers();
+        (&g.surface_vertices, &g.surface_indices, self.prepared.surface_indices.len() as u32)
+    }
+
+    /// The triangles as the light's raster passes draw them: world positions
+    /// (`[f32; 3]`), indices and the index count.
+    pub fn light_geometry(&self) -> (&wgpu::Buffer, &wgpu::Buffer, u32) {
+        let g = self.geometry_buffers();
+        (&g.positions, &g.position_indices, self.prepared.position_indices.len() as u32)
+    }
+
+    fn geometry_buffers(&self) -> &GeometryBuffers {
+        self.vertices.get_or_init(|| {
+            let upload = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
+                let buffer = self.buffer(label, (bytes.len() as u64).max(4), usage | wgpu::BufferUsages::COPY_DST);
+                if !bytes.is_empty() {
+                    self.queue.write_buffer(&buffer, 0, bytes);
+                }
+                buffer
+            };
+            let p = self.prepared;
+            let (vertex, index) = (wgpu::BufferUsages::VERTEX, wgpu::BufferUsages::INDEX);
+            Arc::new(GeometryBuffers {
+                surface_vertices: upload("frame::surface_vertices", bytemuck::cast_slice(&p.surface_vertices), vertex),
+                surface_indices: upload("frame::surface_indices", bytemuck::cast_slice(&p.surface_indices), index),
+                positions: upload("frame::positions", bytemuck::cast_slice(&p.positions), vertex),
+                position_indices: upload("frame::position_indices", bytemuck::cast_slice(&p.position_indices), index),
+            })
+        })
     }
 
     fn hold<T: Any + Send + Sync>(&self, handle: &Arc<T>) {
@@ -354,8 +382,8 @@ impl<'r> Frame<'r> {
     pub(crate) fn into_record(self) -> FrameRecord<'r> {
         let mut held = self.ctx.held.into_inner();
         held.push(self.ctx.gbuffer);
-        if let Some(vertices) = self.ctx.vertices.into_inner() {
-            held.push(vertices);
+        if let Some(geometry) = self.ctx.vertices.into_inner() {
+            held.push(geometry);
         }
         FrameRecord {
             profiler: self.profiler,

@@ -7,6 +7,7 @@ pub mod gpu;
 pub mod image_io;
 pub mod light_frustum;
 pub mod methods;
+pub mod occluders;
 pub mod pass_cache;
 pub mod passes;
 pub mod renderer;

@@ -258,8 +258,9 @@ impl Renderer {
         }
         stats.insert("reused_passes".into(), record.reused.len() as i64);
 
-        let (timings, mut encoder) = record.profiler.finish()?;
-        let readback_start = Instant::now();
+        let (profile, mut encoder, timestamps) = record.profiler.finish()?;
+        let uses_timestamps = timestamps.is_some();
+        let mut readback_start = Instant::now();
         let all = wgpu::TextureAspect::All;
         let copy = |encoder: &mut wgpu::CommandEncoder, texture: &wgpu::Texture, aspect| {
             readback::copy_texture(device, &self.pool, encoder, texture, aspect)
@@ -276,8 +277,22 @@ impl Renderer {
         for i in &record.intermediates {
             pending.push(copy(&mut encoder, &i.texture, i.aspect));
         }
+        let has_timestamps = timestamps.is_some();
+        pending.extend(timestamps);
+        // One submission of what is left and one wait for it all. With
+        // timestamps nothing was submitted before (the whole frame runs now):
+        // `readback` is then the host's part alone, mapping and unpacking;
+        // with CPU clocks every pass was waited for, and it also holds the
+        // copies' own time.
         self.ctx.queue.submit([encoder.finish()]);
-        let mut bytes = readback::map_all(&self.ctx, &pending)?.into_iter();
+        readback::wait_mapped(&self.ctx, &pending)?;
+        if uses_timestamps {
+            readback_start = Instant::now();
+        }
+        let mut all = readback::read_all(&pending)?;
+        let ticks = if has_timestamps { all.pop() } else { None };
+        let timings = profile.timings(ticks);
+        let mut bytes = all.into_iter();
         // Submitted and waited for: what ran may now be reused.
         for (name, key, value) in record.fresh {
             self.cache.insert(name, key, value);

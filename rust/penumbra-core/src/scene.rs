@@ -96,10 +96,21 @@ pub struct Scene {
     pub ambient: [f32; 3],
 }
 
-/// World-space geometry ready for upload: one entry per triangle corner.
+/// World-space geometry ready for upload: one entry per triangle corner,
+/// and the same triangles indexed for drawing.
 #[derive(Debug, Clone)]
 pub struct PreparedScene {
     pub corners: Vec<CornerVertex>,
+    /// The triangles as the camera's G-buffer draws them: `surface_indices`
+    /// (three per triangle, in the order of `corners`) into vertices shared
+    /// by the faces of a mesh with vertex normals, and one per corner for a
+    /// mesh shaded with face normals.
+    pub surface_vertices: Vec<CornerVertex>,
+    pub surface_indices: Vec<u32>,
+    /// The triangles as the light's raster passes draw them: `position_indices`
+    /// (three per triangle, in the same order) into every mesh's world vertices.
+    pub positions: Vec<[f32; 3]>,
+    pub position_indices: Vec<u32>,
     /// Per mesh: world-space vertices and faces, for the silhouette methods.
     pub meshes: Vec<PreparedMesh>,
     /// Per mesh: albedo and object id, indexed by `CornerVertex::mesh_index`.
@@ -405,6 +416,8 @@ impl Scene {
         let light_center = dvec(self.light.center);
         let light_radius = self.light.radius as f64;
         let mut corners = Vec::new();
+        let (mut surface_vertices, mut surface_indices) = (Vec::new(), Vec::new());
+        let (mut positions, mut position_indices) = (Vec::new(), Vec::new());
         let mut meshes = Vec::with_capacity(self.meshes.len());
         let mut materials = Vec::with_capacity(self.meshes.len());
         let mut lo = DVec3::splat(f64::INFINITY);
@@ -416,6 +429,17 @@ impl Scene {
             for v in &world {
                 lo = lo.min(*v);
                 hi = hi.max(*v);
+            }
+            // Indices are u32: the renderer refuses scenes of more corners than that.
+            let position_base = positions.len() as u32;
+            positions.extend(world.iter().map(|v| v.as_vec3().to_array()));
+            let surface_base = surface_vertices.len() as u32;
+            if let Some(normals) = &vertex_normals {
+                surface_vertices.extend(world.iter().zip(normals).map(|(v, n)| CornerVertex {
+                    position: v.as_vec3().into(),
+                    normal: n.as_vec3().into(),
+                    mesh_index: mesh_index as u32,
+                }));
             }
             for (f, face) in faces.iter().enumerate() {
                 let tri = face.map(|i| world[i as usize]);
@@ -449,11 +473,19 @@ impl Scene {
                         Some(normals) => normals[vi as usize],
                         None => face_normals[f],
                     };
-                    corners.push(CornerVertex {
+                    let vertex = CornerVertex {
                         position: tri[corner].as_vec3().into(),
                         normal: normal.as_vec3().into(),
                         mesh_index: mesh_index as u32,
-                    });
+                    };
+                    corners.push(vertex);
+                    position_indices.push(position_base + vi);
+                    if vertex_normals.is_some() {
+                        surface_indices.push(surface_base + vi);
+                    } else {
+                        surface_indices.push(surface_vertices.len() as u32);
+                        surface_vertices.push(vertex);
+                    }
                 }
             }
             materials.push((mesh.albedo, mesh.object_id));
@@ -470,6 +502,10 @@ impl Scene {
         Ok(PreparedScene {
             triangle_count: corners.len() / 3,
             corners,
+            surface_vertices,
+            surface_indices,
+            positions,
+            position_indices,
             meshes,
             materials,
             bounds_min: lo.as_vec3(),

@@ -46,6 +46,7 @@ pub const FILES: &[(&str, &str)] = &[
     ("methods/reference/visibility.wgsl", include_str!("methods/reference/visibility.wgsl")),
     ("methods/pvm/volumes.wgsl", include_str!("methods/pvm/volumes.wgsl")),
     ("methods/pvm/visibility.wgsl", include_str!("methods/pvm/visibility.wgsl")),
+    ("methods/pvm/edge_maps.wgsl", include_str!("methods/pvm/edge_maps.wgsl")),
     ("methods/pvmf/mask.wgsl", include_str!("methods/pvmf/mask.wgsl")),
     ("methods/pvmf/estimate.wgsl", include_str!("methods/pvmf/estimate.wgsl")),
     ("methods/pvmf/blur.wgsl", include_str!("methods/pvmf/blur.wgsl")),
@@ -172,7 +173,7 @@ macro_rules! gpu_struct {
 
 /// Every Rust struct a pass uploads for a shader, with its WGSL twin.
 pub fn gpu_structs() -> Vec<GpuStruct> {
-    use crate::methods::{backprojection, pcf, pcss, pvmf, reference};
+    use crate::methods::{backprojection, pcf, pcss, pvm, pvmf, reference};
     use crate::passes::{gbuffer, shading, shadow_map, shadow_test};
     vec![
         gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
@@ -183,6 +184,7 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
         gpu_struct!(pcf::PcfUniform => "PcfKernel" in "methods/pcf/visibility.wgsl" { kernel, samples, seed, nearest }),
         gpu_struct!(pcss::PcssUniform => "PcssSampling" in "methods/pcss/visibility.wgsl" { blocker_samples, filter_samples, seed, poisson }),
         gpu_struct!(reference::SampleWeightUniform => "SampleWeight" in "methods/reference/visibility.wgsl" { normal, light_center }),
+        gpu_struct!(pvm::EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" { h0, h1 }),
         gpu_struct!(pvmf::SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags }),
         gpu_struct!(pvmf::BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),
         gpu_struct!(backprojection::BackprojectionUniform => "Backprojection" in "methods/backprojection/contour.wgsl" {

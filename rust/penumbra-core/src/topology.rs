@@ -23,6 +23,14 @@ pub struct Edge {
     pub faces: [u32; 2],
 }
 
+/// An edge with more than two faces, or two faces that traverse it the same
+/// way (inconsistent winding): every face on it, in no order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct NonManifoldEdge {
+    pub v: [u32; 2],
+    pub faces: Vec<u32>,
+}
+
 /// Connectivity of one mesh.
 #[derive(Debug, Clone)]
 pub struct Topology {
@@ -33,6 +41,8 @@ pub struct Topology {
     /// Faces in welded indices, degenerate ones removed.
     pub faces: Vec<[u32; 3]>,
     pub edges: Vec<Edge>,
+    /// Edges that are not two-sided (not in `edges`).
+    pub non_manifold: Vec<NonManifoldEdge>,
     /// Edges with one face.
     pub boundary_edges: usize,
     /// Edges with more than two faces, or two faces of the same winding.
@@ -73,7 +83,8 @@ impl Topology {
             }
         }
         let mut edges = Vec::with_capacity(sides.len());
-        let (mut boundary_edges, mut non_manifold_edges) = (0, 0);
+        let mut non_manifold = Vec::new();
+        let mut boundary_edges = 0;
         let mut keys: Vec<_> = sides.into_iter().collect();
         keys.sort_unstable_by_key(|(k, _)| *k);
         for ((a, b), (forward, backward)) in keys {
@@ -87,28 +98,34 @@ impl Topology {
                     boundary_edges += 1;
                     edges.push(Edge { v: [a, b], faces: [NO_FACE, backward[0]] });
                 }
-                _ => non_manifold_edges += 1,
+                _ => non_manifold.push(NonManifoldEdge { v: [a, b], faces: forward.into_iter().chain(backward).collect() }),
             }
         }
-        Self { weld, positions: welded, faces, edges, boundary_edges, non_manifold_edges }
+        let non_manifold_edges = non_manifold.len();
+        Self { weld, positions: welded, faces, edges, non_manifold, boundary_edges, non_manifold_edges }
     }
 
     /// Refuses meshes that are not closed 2-manifolds (what PVM assumes,
     /// Cournia 4.1.1), naming the mesh and the edge counts. With
-    /// `allow_boundary`, edges with one face are accepted (they become
-    /// silhouette edges); non-manifold edges never are.
-    pub fn require_closed(&self, mesh: &str, allow_boundary: bool) -> Result<()> {
+    /// `allow_open`, every mesh is accepted: edges with one face or with
+    /// other than two consistently wound faces get the silhouette test of
+    /// `silhouettes::silhouette` (all their faces on one side).
+    pub fn require_closed(&self, mesh: &str, allow_open: bool) -> Result<()> {
+        if allow_open {
+            return Ok(());
+        }
         if self.non_manifold_edges > 0 {
             return Err(Error::mesh(
                 mesh,
                 format!(
                     "is not a 2-manifold: {} edges have more than two faces or two faces of the same \
-                     winding; the silhouette methods need manifold casters",
+                     winding; pass open_edges='silhouette' to take such edges as silhouette edges where \
+                     all their faces lie on one side",
                     self.non_manifold_edges
                 ),
             ));
         }
-        if self.boundary_edges > 0 && !allow_boundary {
+        if self.boundary_edges > 0 {
             return Err(Error::mesh(
                 mesh,
                 format!(
@@ -129,8 +146,13 @@ impl Topology {
 
     /// The corner of face `f` that is not on edge `e`.
     pub fn opposite_vertex(&self, f: u32, e: &Edge) -> DVec3 {
+        self.opposite(f, e.v)
+    }
+
+    /// The corner of face `f` that is not on the edge between welded vertices `v`.
+    pub fn opposite(&self, f: u32, v: [u32; 2]) -> DVec3 {
         let face = self.faces[f as usize];
-        let i = face.iter().copied().find(|i| *i != e.v[0] && *i != e.v[1]).unwrap_or(face[0]);
+        let i = face.iter().copied().find(|i| *i != v[0] && *i != v[1]).unwrap_or(face[0]);
         self.positions[i as usize]
     }
 }
@@ -171,9 +193,17 @@ mod tests {
         let err = open.require_closed("lid", false).unwrap_err().to_string();
         assert!(err.contains("'lid'") && err.contains("3 boundary edges"), "{err}");
         open.require_closed("lid", true).unwrap();
+        let err = open.require_closed("lid", false).unwrap_err().to_string();
+        assert!(err.contains("open_edges='silhouette'"), "{err}");
         let mut fins = f.clone();
         fins.push([0, 1, 2]); // a third face on edges 0-1, 1-2, 0-2
-        let err = Topology::build(&p, &fins).require_closed("fin", true).unwrap_err().to_string();
-        assert!(err.contains("not a 2-manifold"), "{err}");
+        let finned = Topology::build(&p, &fins);
+        let err = finned.require_closed("fin", false).unwrap_err().to_string();
+        assert!(err.contains("not a 2-manifold") && err.contains("open_edges='silhouette'"), "{err}");
+        finned.require_closed("fin", true).unwrap();
+        // The three edges keep all their faces: two of the tetrahedron's and the fin.
+        assert_eq!(finned.non_manifold.len(), 3);
+        assert!(finned.non_manifold.iter().all(|e| e.faces.len() == 3));
+        assert_eq!(finned.edges.len(), 3);
     }
 }

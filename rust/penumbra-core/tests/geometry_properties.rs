@@ -6,7 +6,7 @@
 //! every run, and a failure is shrunk to a small case and printed.
 
 use glam::{DMat3, DVec3};
-use penumbra_core::methods::pvm::{penumbra_volumes, silhouette, SilhouetteEdge};
+use penumbra_core::methods::pvm::{penumbra_volumes, silhouette, SilhouetteEdge, VolumeGeometry};
 use penumbra_core::methods::pvmf::{mask_volumes, Offsets};
 use penumbra_core::topology::Topology;
 use proptest::prelude::*;
@@ -139,33 +139,48 @@ fn check_volumes(params: &CaseParams) -> Result<(), TestCaseError> {
     let edges = silhouette(&topology, l, false);
     prop_assert!(!edges.is_empty(), "a closed shape seen from outside has a silhouette");
     let reach = 100.0 * scale;
-    let (vertices, stats) = penumbra_volumes(&edges, l, r, reach);
-    prop_assert_eq!(stats.volume_quads, 2 * (edges.len() - stats.light_parallel_edges));
-    prop_assert_eq!(vertices.len(), 6 * stats.volume_quads);
-    for v in &vertices {
-        prop_assert!(finite(&[v.position, v.h0, v.h1]), "{v:?}");
-    }
-    // Every extruded corner lies no nearer the light's centre plane than
-    // its edge: volumes go away from the light (4.1.2's negation rule).
-    for quad in vertices.chunks(6) {
-        let (near, far) = (DVec3::from(quad[0].position.map(f64::from)), DVec3::from(quad[1].position.map(f64::from)));
-        let away = (near - l).normalize();
-        let step = far - near;
-        // f32 positions: 1e-5 of the reach is the rounding of the stored corners.
-        prop_assert!(
-            step.dot(away) >= -1e-5 * reach,
-            "an extrusion goes towards the light: r/scale {}, |l - edge|/scale {}, step.away/reach {}, edges {}",
-            r / scale,
-            (near - l).length() / scale,
-            step.dot(away) / reach,
-            edges.len()
-        );
+    for cone in [false, true] {
+        let VolumeGeometry { vertices, edges: points, stats } = penumbra_volumes(&edges, l, r, reach, cone);
+        prop_assert_eq!(stats.volume_quads, 2 * (edges.len() - stats.light_parallel_edges));
+        prop_assert_eq!(vertices.len(), 6 * stats.volume_quads);
+        prop_assert_eq!(points.len(), stats.volume_quads / 2);
+        for v in &vertices {
+            prop_assert!(finite(&[v.position]) && (v.edge as usize) < points.len(), "{v:?}");
+        }
+        for p in &points {
+            prop_assert!(p.h0.iter().chain(&p.h1).all(|c| c.is_finite()), "{p:?}");
+        }
+        // Every extruded corner lies no nearer the light's centre plane than
+        // its edge: volumes go away from the light (4.1.2's negation rule).
+        for quad in vertices.chunks(6) {
+            for (i, j) in [(0, 1), (5, 4)] {
+                let (near, far) = (DVec3::from(quad[i].position.map(f64::from)), DVec3::from(quad[j].position.map(f64::from)));
+                let away = (near - l).normalize();
+                let step = far - near;
+                // f32 positions: 1e-5 of the reach is the rounding of the stored corners.
+                prop_assert!(
+                    step.dot(away) >= -1e-5 * reach,
+                    "an extrusion goes towards the light: r/scale {}, |l - edge|/scale {}, step.away/reach {}, edges {}",
+                    r / scale,
+                    (near - l).length() / scale,
+                    step.dot(away) / reach,
+                    edges.len()
+                );
+                if cone && r > 0.0 {
+                    // Every extrusion lies in its vertex's light cone (to the f32
+                    // rounding of the stored corners, relative to the reach).
+                    let half_angle = (r / (near - l).length()).min(1.0).asin();
+                    let angle = step.normalize().dot(away).clamp(-1.0, 1.0).acos();
+                    prop_assert!(angle <= half_angle + 1e-4, "extrusion {angle} outside the light cone {half_angle}");
+                }
+            }
+        }
     }
     for s_e in [0.5, 1.0] {
         for offsets in [Offsets::Unit, Offsets::Radius] {
-            let (mask, stats) = mask_volumes(&edges, l, r, s_e, offsets, reach);
+            let (mask, stats) = mask_volumes(&edges, l, r, s_e, offsets, reach, true);
             prop_assert_eq!(stats.mask_quads, 2 * (edges.len() - stats.light_parallel_edges));
-            prop_assert!(mask.iter().all(|m| finite(&[m.position]) && m.d_e.is_finite() && m.d_e > 0.0));
+            prop_assert!(mask.iter().all(|m| finite(&[m.position]) && m.d_e.is_finite() && m.d_e > 0.0 && m.d_local >= m.d_e && m.d_local.is_finite()));
         }
     }
     Ok(())
@@ -234,11 +249,12 @@ fn edge(a: DVec3, b: DVec3, ia: u32, ib: u32) -> SilhouetteEdge {
 }
 
 fn all_finite_pvm_and_pvmf(edges: &[SilhouetteEdge], l: DVec3, r: f64) {
-    let (v, _) = penumbra_volumes(edges, l, r, 50.0);
-    assert!(v.iter().all(|v| finite(&[v.position, v.h0, v.h1])), "{v:?}");
+    let v = penumbra_volumes(edges, l, r, 50.0, true);
+    assert!(v.vertices.iter().all(|v| finite(&[v.position])), "{v:?}");
+    assert!(v.edges.iter().all(|p| p.h0.iter().chain(&p.h1).all(|c| c.is_finite())), "{v:?}");
     for s_e in [1e-9, 0.5, 1.0] {
         for offsets in [Offsets::Unit, Offsets::Radius] {
-            let (m, _) = mask_volumes(edges, l, r, s_e, offsets, 50.0);
+            let (m, _) = mask_volumes(edges, l, r, s_e, offsets, 50.0, true);
             assert!(m.iter().all(|m| finite(&[m.position]) && m.d_e.is_finite()), "{m:?}");
         }
     }
@@ -249,7 +265,7 @@ fn collinear_silhouette_edges_use_the_coincident_plane_rule() {
     // Three collinear edges in a loop-like chain: their planes coincide (n0 = n1).
     let l = DVec3::new(0.0, 5.0, 0.0);
     let edges: Vec<_> = (0..3).map(|i| edge(DVec3::new(i as f64, 1.0, 0.0), DVec3::new(i as f64 + 1.0, 1.0, 0.0), i, i + 1)).collect();
-    let (v, stats) = penumbra_volumes(&edges, l, 0.5, 10.0);
+    let VolumeGeometry { vertices: v, stats, .. } = penumbra_volumes(&edges, l, 0.5, 10.0, true);
     assert_eq!(stats.light_parallel_edges, 0);
     assert!(v.iter().all(|v| finite(&[v.position])));
     // The shared extrusion at vertex 1 is the single plane's ray from d through the vertex.
@@ -273,7 +289,7 @@ fn nearly_collinear_edges_do_not_blow_up() {
         let v = DVec3::new(0.0, 1.0, 0.0);
         let b = DVec3::new(1.0, 1.0, bend);
         let edges = vec![edge(a, v, 0, 1), edge(v, b, 1, 2)];
-        let (out, _) = penumbra_volumes(&edges, l, 0.5, 10.0);
+        let out = penumbra_volumes(&edges, l, 0.5, 10.0, true).vertices;
         assert!(out.iter().all(|q| finite(&[q.position])));
         let far = DVec3::from(out[1].position.map(f64::from)) - a;
         if let Some(p) = previous {
@@ -294,11 +310,11 @@ fn edges_parallel_to_the_light_direction_get_no_volume() {
         edge(DVec3::new(0.0, 2.0, 0.0), DVec3::new(1e-12, 3.0, 0.0), 1, 2),
         edge(DVec3::new(1e-12, 3.0, 0.0), DVec3::new(1.0, 3.0, 0.0), 2, 3),
     ];
-    let (v, stats) = penumbra_volumes(&edges, l, 0.5, 10.0);
+    let VolumeGeometry { vertices: v, stats, .. } = penumbra_volumes(&edges, l, 0.5, 10.0, true);
     assert_eq!(stats.light_parallel_edges, 2);
     assert_eq!(stats.volume_quads, 2);
     assert!(v.iter().all(|v| finite(&[v.position])));
-    let (_, mstats) = mask_volumes(&edges, l, 0.5, 0.5, Offsets::Unit, 10.0);
+    let (_, mstats) = mask_volumes(&edges, l, 0.5, 0.5, Offsets::Unit, 10.0, true);
     assert_eq!(mstats.light_parallel_edges, 2);
     all_finite_pvm_and_pvmf(&edges, l, 0.5);
 }
@@ -313,7 +329,7 @@ fn very_acute_corners_stay_finite_and_away_from_the_light() {
         let a = v - DVec3::new(1.0, 0.0, 0.0);
         let b = v - DVec3::new(angle.cos(), 0.0, angle.sin());
         let edges = vec![edge(a, v, 0, 1), edge(v, b, 1, 2)];
-        let (out, _) = penumbra_volumes(&edges, l, 0.5, 10.0);
+        let out = penumbra_volumes(&edges, l, 0.5, 10.0, true).vertices;
         for quad in out.chunks(6) {
             let near = DVec3::from(quad[0].position.map(f64::from));
             let far = DVec3::from(quad[1].position.map(f64::from));
@@ -336,7 +352,7 @@ fn vertices_with_four_silhouette_edges_are_junctions() {
     topology.require_closed("bowtie", false).unwrap();
     let l = DVec3::new(6.0, 6.0, -6.0);
     let edges = silhouette(&topology, l, false);
-    let (v, stats) = penumbra_volumes(&edges, l, 0.5, 20.0);
+    let VolumeGeometry { vertices: v, stats, .. } = penumbra_volumes(&edges, l, 0.5, 20.0, true);
     assert!(stats.junction_vertices >= 1, "{stats:?}");
     assert!(v.iter().all(|v| finite(&[v.position])));
     all_finite_pvm_and_pvmf(&edges, l, 0.5);
@@ -361,8 +377,19 @@ fn zero_area_duplicate_and_t_junction_faces_are_classified() {
     // A duplicated face: its edges get two faces of the same winding.
     let mut duplicate = f.clone();
     duplicate.push(f[0]);
-    let err = Topology::build(&p, &duplicate).require_closed("dup", true).unwrap_err().to_string();
+    let dup = Topology::build(&p, &duplicate);
+    let err = dup.require_closed("dup", false).unwrap_err().to_string();
     assert!(err.contains("not a 2-manifold"), "{err}");
+    // Taken as open: the duplicated face lies on its twin's side of every
+    // edge, so the silhouette is the closed box's.
+    dup.require_closed("dup", true).unwrap();
+    let l = DVec3::new(0.5, 6.0, 0.3);
+    let key = |edges: Vec<SilhouetteEdge>| {
+        let mut k: Vec<(u32, u32)> = edges.iter().map(|e| (e.ia, e.ib)).collect();
+        k.sort_unstable();
+        k
+    };
+    assert_eq!(key(silhouette(&dup, l, true)), key(silhouette(&Topology::build(&p, &f), l, false)));
     // A t-junction: split one face's edge with a midpoint its neighbour does not share.
     let mut q = p.clone();
     q.push((p[0] + p[2]) * 0.5);

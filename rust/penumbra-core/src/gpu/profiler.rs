@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::gpu::pool::ResourcePool;
+use crate::gpu::readback::{self, PendingReadback};
 use crate::gpu::GpuContext;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -185,54 +186,61 @@ impl<'c> Profiler<'c> {
         self.ctx.wait()
     }
 
-    /// Submits everything recorded, waits, and returns the pass timings.
-    pub fn finish(mut self) -> Result<(Timings, wgpu::CommandEncoder)> {
+    /// Ends the recording. Returns what the timings are made of, the
+    /// encoder (unsubmitted: the caller adds its read-back copies and
+    /// submits everything once), and, with timestamps, the copy of the
+    /// resolved queries to map with the rest.
+    pub fn finish(mut self) -> Result<(Profile, wgpu::CommandEncoder, Option<PendingReadback>)> {
         let source = self.source();
-        let passes = match self.queries.take() {
-            None => {
-                self.flush()?;
-                self.names.drain(..).zip(self.cpu_ms.drain(..)).collect()
-            }
-            Some(set) => {
-                let count = 2 * self.names.len() as u32;
+        let mut pending = None;
+        if let Some(set) = self.queries.take() {
+            let count = 2 * self.names.len() as u32;
+            if count > 0 {
                 let bytes = count as u64 * wgpu::QUERY_SIZE as u64;
-                let device = &self.ctx.device;
-                let resolve_usage = wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC;
-                let resolve = self.pool.buffer(device, "penumbra::timestamps_resolve", bytes.max(8), resolve_usage);
-                let read_usage = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
-                let read = self.pool.buffer(device, "penumbra::timestamps_read", bytes.max(8), read_usage);
-                if count > 0 {
-                    self.encoder.resolve_query_set(&set, 0..count, &resolve, 0);
-                    self.encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, bytes);
-                }
-                self.flush()?;
-                let period_ns = self.ctx.queue.get_timestamp_period() as f64;
-                let ticks: Vec<u64> = if count > 0 {
-                    read.slice(..).map_async(wgpu::MapMode::Read, |_| {});
-                    self.ctx.wait()?;
-                    let view = read.slice(..).get_mapped_range().map_err(|e| {
-                        Error::Gpu(format!("mapping the timestamp buffer failed: {e}"))
-                    })?;
-                    let ticks = bytemuck::pod_collect_to_vec(&view[..bytes as usize]);
-                    drop(view);
-                    // A pooled buffer: unmapped for its next user.
-                    read.unmap();
-                    ticks
-                } else {
-                    Vec::new()
-                };
+                let usage = wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC;
+                let resolve = self.pool.buffer(&self.ctx.device, "penumbra::timestamps_resolve", bytes, usage);
+                self.encoder.resolve_query_set(&set, 0..count, &resolve, 0);
+                pending = Some(readback::copy_buffer(&self.ctx.device, self.pool, &mut self.encoder, &resolve, bytes as u32));
+            }
+        }
+        let profile = Profile {
+            source,
+            names: std::mem::take(&mut self.names),
+            cpu_ms: std::mem::take(&mut self.cpu_ms),
+            period_ns: self.ctx.queue.get_timestamp_period() as f64,
+        };
+        let encoder = std::mem::replace(&mut self.encoder, Self::new_encoder(self.ctx));
+        Ok((profile, encoder, pending))
+    }
+}
+
+/// The timings of a finished recording, once its work is done.
+pub struct Profile {
+    source: TimingSource,
+    names: Vec<String>,
+    cpu_ms: Vec<f64>,
+    period_ns: f64,
+}
+
+impl Profile {
+    /// The pass timings, from CPU clocks or from the mapped timestamps
+    /// (`ticks`: the bytes of the read-back [`Profiler::finish`] returned).
+    pub fn timings(self, ticks: Option<Vec<u8>>) -> Timings {
+        let passes = match self.source {
+            TimingSource::CpuClock => self.names.into_iter().zip(self.cpu_ms).collect(),
+            TimingSource::GpuTimestamps => {
+                let ticks: Vec<u64> = ticks.map(|b| bytemuck::pod_collect_to_vec(&b)).unwrap_or_default();
                 self.names
-                    .drain(..)
+                    .into_iter()
                     .enumerate()
                     .map(|(i, name)| {
-                        let (a, b) = (ticks[2 * i], ticks[2 * i + 1]);
-                        (name, b.saturating_sub(a) as f64 * period_ns * 1e-6)
+                        let (a, b) = (ticks.get(2 * i).copied().unwrap_or(0), ticks.get(2 * i + 1).copied().unwrap_or(0));
+                        (name, b.saturating_sub(a) as f64 * self.period_ns * 1e-6)
                     })
                     .collect()
             }
         };
-        let encoder = Self::new_encoder(self.ctx);
-        Ok((Timings { source, passes }, encoder))
+        Timings { source: self.source, passes }
     }
 }
 

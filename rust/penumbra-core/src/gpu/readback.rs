@@ -77,13 +77,24 @@ impl PendingReadback {
     }
 }
 
-/// Maps every pending buffer (one wait for all), then hands each one's rows,
-/// padding stripped, to `unpack` in order.
+/// Maps every pending buffer (one wait for all), then returns each one's
+/// rows, padding stripped, in order.
 pub fn map_all(ctx: &GpuContext, pending: &[PendingReadback]) -> Result<Vec<Vec<u8>>> {
+    wait_mapped(ctx, pending)?;
+    read_all(pending)
+}
+
+/// Asks for every pending buffer to be mapped and waits for the GPU (all
+/// submitted work included).
+pub fn wait_mapped(ctx: &GpuContext, pending: &[PendingReadback]) -> Result<()> {
     for p in pending {
         p.buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
     }
-    ctx.wait()?;
+    ctx.wait()
+}
+
+/// The rows of every mapped buffer, padding stripped, in order; unmaps them.
+pub fn read_all(pending: &[PendingReadback]) -> Result<Vec<Vec<u8>>> {
     pending
         .iter()
         .map(|p| {

@@ -97,7 +97,7 @@ impl GBufferPass {
             &CameraUniforms { view_proj: super::mat4(projection * view), view: super::mat4(view) },
         );
         let bind_group = ctx.pool.bind_group(ctx.device, "gbuffer::bind_group", &self.layout, &[Binding::Buffer(&uniforms)]);
-        let (vertices, vertex_count) = ctx.vertices();
+        let (vertices, indices, count) = ctx.surface();
         let clear = |c: wgpu::Color| wgpu::Operations { load: wgpu::LoadOp::Clear(c), store: wgpu::StoreOp::Store };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer::pass"),
@@ -128,6 +128,7 @@ impl GBufferPass {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.set_vertex_buffer(0, vertices.slice(..));
-        pass.draw(0..vertex_count, 0..1);
+        pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..count, 0, 0..1);
     }
 }

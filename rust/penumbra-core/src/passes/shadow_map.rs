@@ -55,8 +55,9 @@ impl ShadowMapPass {
         let module = crate::shaders::module(device, "shadow_map::shader", crate::shaders::compose("passes/shadow_map.wgsl"));
         let pipeline_layout = layout::pipeline_layout(device, "shadow_map::pipeline_layout", &layout);
         let position_only = [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }];
+        let positions = wgpu::VertexBufferLayout { array_stride: 12, step_mode: wgpu::VertexStepMode::Vertex, attributes: &position_only };
         let pipeline = |label: &str, cull_mode: Option<wgpu::Face>| {
-            let buffers = [Some(super::corner_layout(&position_only))];
+            let buffers = [Some(positions.clone())];
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&pipeline_layout),
@@ -167,13 +168,14 @@ impl ShadowMapPass {
     ) {
         let uniforms = uniform_buffer(ctx, "shadow_map::uniforms", &shadow_uniforms(frustum));
         let bind_group = ctx.pool.bind_group(ctx.device, "shadow_map::bind_group", &self.layout, &[Binding::Buffer(&uniforms)]);
-        let vertices = ctx.vertices();
+        let (positions, indices, count) = ctx.light_geometry();
         let draw = |encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, pipeline, writes| {
             let mut pass = begin_depth_pass(encoder, target, writes);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
-            pass.set_vertex_buffer(0, vertices.0.slice(..));
-            pass.draw(0..vertices.1, 0..1);
+            pass.set_vertex_buffer(0, positions.slice(..));
+            pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..count, 0, 0..1);
         };
         let part = |first: bool, last: bool| timestamps.and_then(|t| t.render_part(first, last));
         let target = &map.layer_views[layer as usize];

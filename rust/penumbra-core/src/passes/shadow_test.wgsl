@@ -1,3 +1,4 @@
+#import shaders/common.wgsl
 #import shaders/light_space.wgsl
 
 // The shadow-map test from the light centre with its bias schemes (Cournia
@@ -65,4 +66,23 @@ fn shadow_test_visibility(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f3
     }
     let r = biased_receiver(t, p, n, cos_theta);
     return select(0.0, 1.0, r.w <= map_depth(t, map, r.xyz));
+}
+
+// Cournia Eq. 4.1 and 4.2: the fraction of a disk of radius r > 0 whose
+// centre lies at signed distance s from a line, on the far side of the line
+// from the centre when s > 0 (and on the centre's side when s < 0).
+// Continuous in s, 1/2 at 0.
+fn disk_fraction(s: f32, r: f32) -> f32 {
+    let c = clamp(s / r, -1.0, 1.0);
+    // a = acos(s/r) r^2 / 2 - s sqrt(r^2 - s^2) / 2; k = 2a / (pi r^2), in units of r.
+    let a = 0.5 * acos(c) - 0.5 * c * sqrt(max(1.0 - c * c, 0.0));
+    return clamp(2.0 * a / PI, 0.0, 1.0);
+}
+
+// The fraction of a sphere light of radius r = t.center.w > 0 above the
+// tangent plane of a receiver at p with normal n: Eq. 4.1 with that plane
+// as the cutting plane (the light's part below it is hidden by the
+// receiver's own surface, as the ground truth counts it).
+fn horizon_fraction(t: ShadowTest, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    return disk_fraction(-dot(n, t.center.xyz - p), t.center.w);
 }

@@ -11,13 +11,30 @@ use glam::DVec3;
 use crate::silhouettes::SilhouetteEdge;
 
 
-/// One corner of a volume quadrilateral with the silhouette edge it comes from.
+/// One corner of a volume quadrilateral with the index (into
+/// [`VolumeGeometry::edges`]) of the silhouette edge it comes from.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct VolumeVertex {
     pub position: [f32; 3],
-    pub h0: [f32; 3],
-    pub h1: [f32; 3],
+    pub edge: u32,
+}
+
+/// The end points h0 and h1 of a silhouette edge with a volume (w unused),
+/// as the visibility pass reads them (4.1.3's edge maps, by index).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct EdgePoints {
+    pub h0: [f32; 4],
+    pub h1: [f32; 4],
+}
+
+/// Everything pass 2 renders: the quadrilaterals' corners and the edges they index.
+#[derive(Debug, Clone, Default)]
+pub struct VolumeGeometry {
+    pub vertices: Vec<VolumeVertex>,
+    pub edges: Vec<EdgePoints>,
+    pub stats: VolumeStats,
 }
 
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -29,6 +46,13 @@ pub struct VolumeStats {
     pub junction_vertices: usize,
     /// Edges seen end-on from the light (no hard-shadow plane): no volume.
     pub light_parallel_edges: usize,
+    /// Silhouette edges hidden from the light's centre (no volume; counted
+    /// in `silhouette_edges`).
+    pub hidden_edges: usize,
+    /// Quadrilateral corners whose neighbouring planes meet outside the
+    /// vertex's light cone (`in_light_cone`): kept as the paper has them
+    /// without repair "cone", each edge's own plane with it.
+    pub extrusions_outside_cone: usize,
 }
 
 /// The planes of one silhouette edge (4.1.2).
@@ -61,8 +85,10 @@ fn edge_planes(e: &SilhouetteEdge, l: DVec3, r: f64) -> Option<EdgePlanes> {
 }
 
 /// Extrusion vector at vertex `v` shared by the planes with normals `n_in`
-/// (incoming edge) and `n_out` (outgoing edge), both through `v` (4.1.2).
-fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3) -> DVec3 {
+/// (incoming edge) and `n_out` (outgoing edge), both through `v` (4.1.2),
+/// for a light of centre `l` and radius `r`; and whether the planes'
+/// intersection left the vertex's light cone.
+fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3, r: f64, cone: bool) -> (DVec3, bool) {
     let line = n_out.cross(n_in);
     // Coincident (or nearly) planes: the paper's rule, away from the displaced light.
     let mut dir = if line.length() < 1e-9 { (v - d).normalize_or_zero() } else { line.normalize() };
@@ -75,23 +101,64 @@ fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3) -> DVec3 {
     if dir.dot(v - d) < 0.0 {
         dir = -dir;
     }
-    // Every ray of the true penumbra through v leaves the light: it lies in
-    // the cone of half-angle asin(r / |v - l|) about v - l. For a light large
-    // against its distance, the two planes can meet in a line that turns back
-    // past the plane through v perpendicular to v - l (found by the property
-    // tests: r = 1.8, |v - l| = 2.7 gave a line 94 degrees off v - l), and the
-    // volume then sweeps over space in front of the silhouette. There the
-    // vertex takes its own plane's ray from d instead, which always leaves
-    // the light: n is orthogonal to v - l, so (v - d).(v - l) = |v - l|^2 > 0.
-    if dir.dot(v - l) <= 0.0 {
-        return (v - d).normalize_or_zero();
+    let inside = in_light_cone(v, dir, d, l, r);
+    let outside = inside != dir;
+    if cone {
+        return (inside, outside);
     }
-    dir
+    // The paper's construction alone (`repairs = "none"`), with the one
+    // guard it always had: every ray of the true penumbra through v leaves
+    // the light, so it lies in the cone of half-angle asin(r / |v - l|)
+    // about v - l. For a light large against its distance, the two planes
+    // can meet in a line that turns back past the plane through v
+    // perpendicular to v - l (found by the property tests: r = 1.8,
+    // |v - l| = 2.7 gave a line 94 degrees off v - l), and the volume then
+    // sweeps over space in front of the silhouette. There the vertex takes
+    // its own plane's ray from d instead, which always leaves the light: n is
+    // orthogonal to v - l, so (v - d).(v - l) = |v - l|^2 > 0.
+    if dir.dot(v - l) <= 0.0 {
+        return ((v - d).normalize_or_zero(), outside);
+    }
+    (dir, outside)
+}
+
+/// `dir` if it lies in the cone of the rays that leave the light and pass
+/// through `v` (the cone about `v - l` of half-angle asin(r / |v - l|)),
+/// else the ray from the edge's own displaced light position `d` through `v`.
+///
+/// Departure from 4.1.2 (repair "cone"): every ray of the true penumbra
+/// through `v` comes from a point of the light, so it lies in that cone. The
+/// intersection of two neighbouring planes does not when the planes are
+/// nearly parallel (a jagged silhouette whose consecutive edges are nearly
+/// collinear seen from the light but not in depth: the line then turns
+/// towards the silhouette's own direction), nearly opposite (a silhouette
+/// that folds back), or meet at a sharp corner (the miter runs off beyond
+/// the cone). On spot and the teapot of ../shared/meshes 21-74% of the
+/// quad corners lie outside it (`extrusions_outside_light_cone`,
+/// docs/real_meshes.md), some far off, and their quads swept across the
+/// floor as streaks. No vector in both planes
+/// lies in the cone then; each edge keeps its own plane at `v` (the paper's
+/// coincident-plane rule), which leaves a sliver between the two quads
+/// where the shadow-map test decides. (Clamping the miter onto the cone
+/// instead tilts the whole planar quad of a long edge off its plane and
+/// narrows its penumbra along all of it: tests/test_pvm.py's disk-cut test
+/// across a bar's edge failed with it.)
+fn in_light_cone(v: DVec3, dir: DVec3, d: DVec3, l: DVec3, r: f64) -> DVec3 {
+    let to_v = v - l;
+    // No geometry touches the light (scene validation): |v - l| > r >= 0.
+    let sin_c = (r / to_v.length()).min(1.0);
+    let cos_c = (1.0 - sin_c * sin_c).max(0.0).sqrt();
+    if dir.dot(to_v.normalize()) >= cos_c {
+        return dir;
+    }
+    (v - d).normalize_or_zero()
 }
 
 /// Builds the outer and inner quadrilaterals of every silhouette edge,
-/// extruded by `reach` (beyond the light's far plane).
-pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64) -> (Vec<VolumeVertex>, VolumeStats) {
+/// extruded by `reach` (beyond the light's far plane). With `cone`, every
+/// extrusion vector lies in its vertex's light cone (`in_light_cone`);
+/// without, it is the paper's plane intersection alone.
+pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, cone: bool) -> VolumeGeometry {
     let mut stats = VolumeStats { silhouette_edges: edges.len(), ..Default::default() };
     let planes: Vec<Option<EdgePlanes>> = edges.iter().map(|e| edge_planes(e, l, r)).collect();
     // Loop connectivity: the incoming and outgoing edges of each vertex.
@@ -115,6 +182,8 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64) 
     stats.junction_vertices = junctions.len();
 
     let mut vertices = Vec::with_capacity(edges.len() * 12);
+    let mut points = Vec::with_capacity(edges.len());
+    let outside = std::cell::Cell::new(0usize);
     let f = |p: DVec3| p.as_vec3().to_array();
     for (i, e) in edges.iter().enumerate() {
         let Some(own) = &planes[i] else {
@@ -127,10 +196,10 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64) 
             match neighbour.and_then(|j| planes[j].as_ref()) {
                 Some(other) => {
                     let (n_in, n_out) = if start { (other, own) } else { (own, other) };
-                    (
-                        extrusion(v, n_in.outer, n_out.outer, own.d_outer, l),
-                        extrusion(v, n_in.inner, n_out.inner, own.d_inner, l),
-                    )
+                    let (o, outer_outside) = extrusion(v, n_in.outer, n_out.outer, own.d_outer, l, r, cone);
+                    let (i, inner_outside) = extrusion(v, n_in.inner, n_out.inner, own.d_inner, l, r, cone);
+                    outside.set(outside.get() + usize::from(outer_outside) + usize::from(inner_outside));
+                    (o, i)
                 }
                 // Unpaired: this edge's own plane alone (coincident-plane rule).
                 None => ((v - own.d_outer).normalize_or_zero(), (v - own.d_inner).normalize_or_zero()),
@@ -139,15 +208,20 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64) 
         let (a_out, a_in) = at(e.a, e.ia, true);
         let (b_out, b_in) = at(e.b, e.ib, false);
         debug_assert!(own.n.is_finite());
+        let edge = points.len() as u32;
+        let [ax, ay, az] = f(e.a);
+        let [bx, by, bz] = f(e.b);
+        points.push(EdgePoints { h0: [ax, ay, az, 1.0], h1: [bx, by, bz, 1.0] });
         for (va, vb) in [(a_out, b_out), (a_in, b_in)] {
             let quad = [e.a, e.a + va * reach, e.b + vb * reach, e.b];
             for k in [0, 1, 2, 0, 2, 3] {
-                vertices.push(VolumeVertex { position: f(quad[k]), h0: f(e.a), h1: f(e.b) });
+                vertices.push(VolumeVertex { position: f(quad[k]), edge });
             }
             stats.volume_quads += 1;
         }
     }
-    (vertices, stats)
+    stats.extrusions_outside_cone = outside.get();
+    VolumeGeometry { vertices, edges: points, stats }
 }
 
 #[cfg(test)]
@@ -184,7 +258,7 @@ mod tests {
             // Normal points away from the cube's centre (the occluder).
             assert!(n.dot(e.a - DVec3::new(0.0, 2.0, 0.0)) > 0.0, "{e:?}");
         }
-        let (vertices, stats) = penumbra_volumes(&edges, l, 0.5, 100.0);
+        let VolumeGeometry { vertices, stats, .. } = penumbra_volumes(&edges, l, 0.5, 100.0, true);
         assert_eq!(stats.junction_vertices, 0);
         assert_eq!(stats.volume_quads, 8);
         assert_eq!(vertices.len(), 8 * 6);
@@ -197,7 +271,7 @@ mod tests {
     fn outer_volume_leans_outwards_and_inner_inwards() {
         let l = DVec3::new(0.0, 6.0, 0.0);
         let edges = silhouette(&cube(), l, false);
-        let (vertices, _) = penumbra_volumes(&edges, l, 0.5, 10.0);
+        let vertices = penumbra_volumes(&edges, l, 0.5, 10.0, true).vertices;
         // Far corners: outer quads spread beyond the hard shadow's, inner ones inside it.
         let hard_spread = |y: f32| 0.5 * (6.0 - y) / (6.0 - 2.5);
         let (outer, inner) = vertices.split_at(6);
@@ -218,11 +292,96 @@ mod tests {
             SilhouetteEdge { a: DVec3::new(1.0, 1.0, 0.0), b: DVec3::new(2.0, 1.0, 0.0), ia: 2, ib: 3 },
             SilhouetteEdge { a: DVec3::new(2.0, 1.0, 0.0), b: DVec3::new(3.0, 1.0, 0.0), ia: 3, ib: 4 },
         ];
-        let (vertices, stats) = penumbra_volumes(&edges, l, 0.5, 10.0);
+        let VolumeGeometry { vertices, edges: points, stats } = penumbra_volumes(&edges, l, 0.5, 10.0, true);
         assert_eq!(stats.light_parallel_edges, 1);
-        assert!(vertices.iter().all(|v| v.position.iter().chain(&v.h0).chain(&v.h1).all(|c| c.is_finite())));
+        assert!(vertices.iter().all(|v| v.position.iter().all(|c| c.is_finite()) && (v.edge as usize) < points.len()));
+        assert!(points.iter().all(|p| p.h0.iter().chain(&p.h1).all(|c| c.is_finite())));
         // Radius 0: all planes coincide with the hard-shadow plane; still finite.
-        let (vertices, _) = penumbra_volumes(&edges, l, 0.0, 10.0);
+        let vertices = penumbra_volumes(&edges, l, 0.0, 10.0, true).vertices;
         assert!(vertices.iter().all(|v| v.position.iter().all(|c| c.is_finite())));
+    }
+
+    /// The largest angle between an extrusion and its vertex's light-cone
+    /// axis, in units of the cone's half-angle.
+    fn widest_extrusion(g: &VolumeGeometry, l: DVec3, r: f64) -> f64 {
+        let mut widest: f64 = 0.0;
+        for quad in g.vertices.chunks(6) {
+            for (i, j) in [(0, 1), (5, 4)] {
+                let near = DVec3::from(quad[i].position.map(f64::from));
+                let far = DVec3::from(quad[j].position.map(f64::from));
+                let angle = (far - near).normalize().dot((near - l).normalize()).clamp(-1.0, 1.0).acos();
+                widest = widest.max(angle / (r / (near - l).length()).asin());
+            }
+        }
+        widest
+    }
+
+    /// A UV sphere of radius 1 at (0, 2, 0) whose vertices are pushed in or
+    /// out by up to `bump` of the radius (a fixed pseudo-random pattern): a
+    /// smooth surface as a scanned or modelled mesh tessellates it.
+    fn bumpy_sphere(rings: u32, segments: u32, bump: f64) -> Topology {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut jitter = || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            1.0 + bump * ((state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0)
+        };
+        let centre = DVec3::new(0.0, 2.0, 0.0);
+        let mut p = vec![centre + DVec3::Y * jitter(), centre - DVec3::Y * jitter()];
+        for i in 1..rings {
+            let theta = std::f64::consts::PI * i as f64 / rings as f64;
+            for j in 0..segments {
+                let phi = std::f64::consts::TAU * j as f64 / segments as f64;
+                p.push(centre + DVec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()) * jitter());
+            }
+        }
+        let at = |i: u32, j: u32| 2 + (i - 1) * segments + (j % segments);
+        let mut f = Vec::new();
+        for j in 0..segments {
+            f.push([0, at(1, j + 1), at(1, j)]);
+            f.push([1, at(rings - 1, j), at(rings - 1, j + 1)]);
+            for i in 1..rings - 1 {
+                f.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
+                f.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+            }
+        }
+        Topology::build(&p, &f)
+    }
+
+    #[test]
+    fn jagged_silhouettes_extrude_inside_the_light_cone() {
+        // The silhouette of a bumpy tessellated sphere zigzags, folds back and
+        // turns sharp corners as the light sees it; the paper's plane
+        // intersections there leave the light's cone by several times its
+        // angle (the streaks of issue 15), the repaired ones never do.
+        let l = DVec3::new(1.5, 6.0, 1.0);
+        let r = 0.5;
+        let edges = silhouette(&bumpy_sphere(24, 48, 0.05), l, false);
+        assert!(edges.len() > 40);
+        let paper = widest_extrusion(&penumbra_volumes(&edges, l, r, 10.0, false), l, r);
+        assert!(paper > 3.0, "the paper's extrusions stay near the cone here: {paper}");
+        let repaired = widest_extrusion(&penumbra_volumes(&edges, l, r, 10.0, true), l, r);
+        assert!(repaired <= 1.0 + 1e-4, "{repaired}");
+    }
+
+    #[test]
+    fn a_long_edge_keeps_its_own_planes_at_square_corners() {
+        // The cube's silhouette under the light: square corners, whose miters
+        // leave the light's cone (by sqrt 2). Each edge then keeps its own
+        // outer and inner planes: every corner of its quads lies in them.
+        let l = DVec3::new(0.0, 6.0, 0.0);
+        let edges = silhouette(&cube(), l, false);
+        let g = penumbra_volumes(&edges, l, 0.5, 10.0, true);
+        assert_eq!(g.stats.junction_vertices, 0);
+        let mut quads = g.vertices.chunks(6);
+        for e in edges.iter().filter_map(|e| edge_planes(e, l, 0.5).map(|p| (e, p))) {
+            let (edge, planes) = e;
+            for normal in [planes.outer, planes.inner] {
+                let quad = quads.next().unwrap();
+                for corner in quad {
+                    let p = DVec3::from(corner.position.map(f64::from));
+                    assert!(normal.dot(p - edge.a).abs() < 1e-5, "{p} off its edge's plane");
+                }
+            }
+        }
     }
 }

@@ -20,9 +20,9 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::error::Result;
-use crate::frame::{Frame, Intermediate};
+use crate::frame::{Frame, FrameContext, Intermediate};
 use crate::gpu::layout;
-use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
+use crate::gpu::pool::{Binding, Layout, PooledBuffer, PooledTexture, ResourcePool};
 use crate::light_frustum::LightProjection;
 use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
@@ -31,12 +31,21 @@ use crate::passes::screen::ScreenPass;
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 use crate::passes::volumes::VolumePass;
-pub use crate::silhouettes::{silhouette, OpenEdges, SilhouetteCache, SilhouetteEdge};
+use crate::silhouettes::SceneSilhouette;
+pub use crate::silhouettes::{silhouette, OpenEdges, Repairs, SilhouetteCache, SilhouetteEdge};
 
 pub mod geometry;
-pub use geometry::{penumbra_volumes, VolumeStats, VolumeVertex};
+pub use geometry::{penumbra_volumes, EdgePoints, VolumeGeometry, VolumeStats, VolumeVertex};
 
-pub const EDGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The penumbra volume edge map: the index + 1 of the edge whose volume is
+/// nearest the light (0: none); pvm/volumes.wgsl says why not the paper's points.
+pub const EDGE_INDEX_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// The `pvm_edge0` / `pvm_edge1` intermediates: the paper's edge maps.
+pub const EDGE_POINT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// The values of `repairs`: cumulative, in the order docs/real_meshes.md
+/// measures them; "all" (the default) adds the horizon to the last.
+pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "cone", "cone+hidden", "cone+hidden+centre"];
 
 /// The penumbra volume map (pass 2), as the pass cache keeps it.
 pub const PENUMBRA_VOLUMES: CachedPass = CachedPass { name: "penumbra_volumes", capacity: 1 };
@@ -47,24 +56,29 @@ pub struct PvmParams {
     /// The 3k^2 - 2k^3 interpolant of 4.2.
     pub falloff: bool,
     pub open_edges: OpenEdges,
+    /// Departures from the paper for real meshes (`Repairs`).
+    pub repairs: Repairs,
 }
 
 /// The penumbra volume map (pass 2).
 pub struct PvmVolumes {
     pub volume_depth: PooledTexture,
-    pub edge0: PooledTexture,
-    pub edge1: PooledTexture,
+    /// Per texel, the index + 1 into `edges` of the volume nearest the light (0: none).
+    pub edge_index: PooledTexture,
+    /// The silhouette edges' end points ([`EdgePoints`]; one zeroed entry when there is none).
+    pub edges: PooledBuffer,
     pub stats: VolumeStats,
     /// Meshes whose silhouettes came from the silhouette cache.
     pub silhouette_cache_hits: usize,
 }
 
 /// What pass 2 reads besides the geometry: the light, the projection, the
-/// map size and `open_edges` (appended to the pass-cache key).
+/// map size, `open_edges` and the geometric repairs (appended to the pass-cache key).
 pub fn volumes_key(params: &PvmParams, projection: &LightProjection, (l, r): (DVec3, f64), key: &mut PassKey) {
     key.f64s(&l.to_array())
         .f64s(&[r])
         .bytes(params.open_edges.name().as_bytes())
+        .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden)])
         .projection(projection)
         .u32(params.shadow.map_size);
 }
@@ -72,6 +86,27 @@ pub fn volumes_key(params: &PvmParams, projection: &LightProjection, (l, r): (DV
 pub struct PenumbraVolumeMaps {
     volume_pass: VolumePass,
     visibility: ScreenPass,
+    edge_maps_pipeline: wgpu::ComputePipeline,
+    edge_maps_layout: Layout,
+}
+
+/// A write-only storage binding of a light-space array image (compute).
+fn storage_array(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+        },
+        count: None,
+    }
+}
+
+/// A light-space image of edge indices (`texture_2d_array<u32>`).
+fn uint_array(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    layout::array_texture(binding, wgpu::TextureSampleType::Uint)
 }
 
 impl Method for PenumbraVolumeMaps {
@@ -85,9 +120,15 @@ impl Method for PenumbraVolumeMaps {
             ParamSpec::bool("falloff", true, "the 3k^2 - 2k^3 interpolant of 4.2 (false: the disk fraction k)"),
             ParamSpec::choice(
                 "open_edges",
-                "error",
+                "silhouette",
                 &OpenEdges::NAMES,
-                "casters with boundary edges: refuse them, or treat boundary edges as silhouette edges",
+                "edges that are not two-sided (open and non-manifold meshes): silhouette edges where all their faces lie on one side of the plane through them and the light, or refuse such meshes",
+            ),
+            ParamSpec::choice(
+                "repairs",
+                "all",
+                &REPAIR_LEVELS,
+                "departures from the paper for real meshes, cumulative (docs/real_meshes.md): none, cone, cone+hidden, cone+hidden+centre, all (+horizon)",
             ),
         ]);
         specs
@@ -98,6 +139,7 @@ impl Method for PenumbraVolumeMaps {
             shadow: ShadowMapSettings::from_params(p),
             falloff: p.bool("falloff"),
             open_edges: OpenEdges::parse(p.choice("open_edges")),
+            repairs: Repairs::parse(p.choice("repairs")),
         })
     }
 
@@ -112,8 +154,8 @@ impl Method for PenumbraVolumeMaps {
             "pvm::volume_pass",
             crate::shaders::compose("methods/pvm/volumes.wgsl"),
             ("vs_main", "fs_main"),
-            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3],
-            &[EDGE_FORMAT, EDGE_FORMAT],
+            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
+            &[EDGE_INDEX_FORMAT],
         );
         let visibility = ScreenPass::new(
             device,
@@ -123,8 +165,8 @@ impl Method for PenumbraVolumeMaps {
             &[
                 layout::depth_array,
                 layout::depth_array,
-                layout::float_array,
-                layout::float_array,
+                uint_array,
+                layout::parameters,
                 layout::parameters,
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
@@ -132,7 +174,14 @@ impl Method for PenumbraVolumeMaps {
             ],
             &["main"],
         );
-        Self { volume_pass, visibility }
+        let edge_maps_layout = pool.layout(
+            device,
+            "pvm::edge_maps_layout",
+            &[uint_array(0), layout::parameters(1), storage_array(2, EDGE_POINT_FORMAT), storage_array(3, EDGE_POINT_FORMAT)],
+        );
+        let edge_maps_pipeline =
+            layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shaders::compose("methods/pvm/edge_maps.wgsl"), &edge_maps_layout);
+        Self { volume_pass, visibility, edge_maps_pipeline, edge_maps_layout }
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmParams) -> Result<MethodOutput> {
@@ -151,7 +200,7 @@ impl Method for PenumbraVolumeMaps {
         let membership = frame.ctx.screen_texture("pvm::in_volume");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
             let counter = ctx.counters("pvm::pixels_in_volume", 1, encoder);
-            let flags = u32::from(params.falloff);
+            let flags = u32::from(params.falloff) | (u32::from(params.repairs.centre) << 1) | (u32::from(params.repairs.horizon) << 2);
             let uniforms = ctx.parameters(
                 "pvm::visibility_uniforms",
                 &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags),
@@ -159,8 +208,8 @@ impl Method for PenumbraVolumeMaps {
             let resources = [
                 Binding::Texture(&map),
                 Binding::Texture(&volumes.volume_depth),
-                Binding::Texture(&volumes.edge0),
-                Binding::Texture(&volumes.edge1),
+                Binding::Texture(&volumes.edge_index),
+                Binding::Buffer(&volumes.edges),
                 Binding::Buffer(&uniforms),
                 Binding::Texture(&visibility),
                 Binding::Texture(&membership),
@@ -174,11 +223,16 @@ impl Method for PenumbraVolumeMaps {
         frame.stat("penumbra_volumes", s.volume_quads as i64);
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
+        frame.stat("hidden_silhouette_edges", s.hidden_edges as i64);
+        frame.stat("extrusions_outside_light_cone", s.extrusions_outside_cone as i64);
         frame.stat("silhouette_cache_hits", if fresh { volumes.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counter, &["pixels_in_volume"]);
         frame.intermediate(Intermediate::depth("pvm_volume_depth", &volumes.volume_depth, projection.far()));
-        frame.intermediate(Intermediate::color("pvm_edge0", &volumes.edge0, 3));
-        frame.intermediate(Intermediate::color("pvm_edge1", &volumes.edge1, 3));
+        if frame.wants_intermediates() {
+            let (edge0, edge1) = frame.untimed(|ctx, encoder| self.record_edge_maps(ctx, encoder, &volumes, params.shadow.map_size));
+            frame.intermediate(Intermediate::color("pvm_edge0", &edge0, 3));
+            frame.intermediate(Intermediate::color("pvm_edge1", &edge1, 3));
+        }
         frame.intermediate(Intermediate::color("pvm_in_volume", &membership, 1));
         Ok(MethodOutput { visibility })
     }
@@ -189,24 +243,52 @@ impl PenumbraVolumeMaps {
     /// and renders them into the penumbra volume map (4.1.3).
     fn record_volumes(&self, frame: &mut Frame<'_>, params: &PvmParams, projection: &LightProjection) -> Result<PvmVolumes> {
         let map = params.shadow.map_size;
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
-        let edge0 = frame.ctx.light_texture("pvm::edge0_map", map, projection.layers(), EDGE_FORMAT, usage);
-        let edge1 = frame.ctx.light_texture("pvm::edge1_map", map, projection.layers(), EDGE_FORMAT, usage);
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let edge_index = frame.ctx.light_texture("pvm::edge_index_map", map, projection.layers(), EDGE_INDEX_FORMAT, usage);
         // The CPU work (silhouettes and volumes) is part of the pass's time.
-        let (volume_depth, stats, silhouette_cache_hits) = frame.pass("penumbra_volumes", |ctx, encoder, ts| -> Result<_> {
+        let (volume_depth, edges, stats, silhouette_cache_hits) = frame.pass("penumbra_volumes", |ctx, encoder, ts| -> Result<_> {
             let (l, r) = (ctx.light.center, ctx.light.radius);
-            let (mut stats, mut cache_hits, mut vertices) = (VolumeStats::default(), 0, Vec::new());
+            let (mut cache_hits, mut geometry) = (0, VolumeGeometry::default());
             // A point light has no penumbra: skip the volumes entirely.
             if r > 0.0 {
-                let (edges, hits) = ctx.shared.silhouettes.edges(ctx.prepared, l, params.open_edges)?;
-                cache_hits = hits;
+                let silhouette = if params.repairs.hidden {
+                    ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges)?
+                } else {
+                    let (edges, cache_hits) = ctx.shared.silhouettes.edges(ctx.prepared, l, params.open_edges)?;
+                    SceneSilhouette { edges, cache_hits, hidden_edges: 0 }
+                };
+                cache_hits = silhouette.cache_hits;
                 // Beyond the far plane of every face (at most sqrt(3) far from the light).
                 let reach = 4.0 * projection.far() as f64 + 4.0 * r;
-                (vertices, stats) = penumbra_volumes(&edges, l, r, reach);
+                geometry = penumbra_volumes(&silhouette.edges, l, r, reach, params.repairs.cone);
+                geometry.stats.hidden_edges = silhouette.hidden_edges;
+                geometry.stats.silhouette_edges += silhouette.hidden_edges;
             }
-            let depth = self.volume_pass.record(ctx, encoder, projection, &vertices, map, &[&edge0, &edge1], ts)?;
-            Ok((depth, stats, cache_hits))
+            // A storage binding may not be empty: one zeroed entry stands for no edges.
+            let points = if geometry.edges.is_empty() { vec![EdgePoints { h0: [0.0; 4], h1: [0.0; 4] }] } else { std::mem::take(&mut geometry.edges) };
+            let bytes: &[u8] = bytemuck::cast_slice(&points);
+            let edges = ctx.buffer("pvm::edges", bytes.len() as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
+            ctx.queue.write_buffer(&edges, 0, bytes);
+            let depth = self.volume_pass.record(ctx, encoder, projection, &geometry.vertices, map, &[&edge_index], ts)?;
+            Ok((depth, edges, geometry.stats, cache_hits))
         })??;
-        Ok(PvmVolumes { volume_depth, edge0, edge1, stats, silhouette_cache_hits })
+        Ok(PvmVolumes { volume_depth, edge_index, edges, stats, silhouette_cache_hits })
+    }
+
+    /// The paper's two edge maps (4.1.3) rebuilt from the edge-index map,
+    /// for the `pvm_edge0` and `pvm_edge1` intermediates.
+    fn record_edge_maps(&self, ctx: &FrameContext<'_>, encoder: &mut wgpu::CommandEncoder, volumes: &PvmVolumes, map: u32) -> (PooledTexture, PooledTexture) {
+        let layers = volumes.edge_index.texture.depth_or_array_layers();
+        let usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
+        let edge0 = ctx.light_texture("pvm::edge0_map", map, layers, EDGE_POINT_FORMAT, usage);
+        let edge1 = ctx.light_texture("pvm::edge1_map", map, layers, EDGE_POINT_FORMAT, usage);
+        let resources = [Binding::Texture(&volumes.edge_index), Binding::Buffer(&volumes.edges), Binding::Texture(&edge0), Binding::Texture(&edge1)];
+        let bind_group = ctx.pool.bind_group(ctx.device, "pvm::edge_maps_bind_group", &self.edge_maps_layout, &resources);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("pvm::edge_maps_pass"), timestamp_writes: None });
+        pass.set_pipeline(&self.edge_maps_pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(map.div_ceil(8), map.div_ceil(8), layers);
+        drop(pass);
+        (edge0, edge1)
     }
 }

@@ -10,24 +10,32 @@
 
 @group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(3) var volume_depth: texture_depth_2d_array;
-@group(0) @binding(4) var edge0_map: texture_2d_array<f32>;
-@group(0) @binding(5) var edge1_map: texture_2d_array<f32>;
-// mode.y bit 0: falloff.
+// The penumbra volume edge map (4.1.3), by index into `edges` (pvm/volumes.wgsl).
+@group(0) @binding(4) var edge_index: texture_2d_array<u32>;
+struct EdgePoints {
+    h0: vec4<f32>,
+    h1: vec4<f32>,
+};
+@group(0) @binding(5) var<storage, read> edges: array<EdgePoints>;
+// mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon".
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var<storage, read_write> pixels_in_volume: atomic<u32>;
 
-// Eq. 4.1 and 4.2: the fraction of a disk of radius r whose centre lies at
-// signed distance s from a line, on the far side of the line from the centre
-// when s > 0 (and on the centre's side when s < 0). Continuous in s, 1/2 at 0.
-fn disk_fraction(s: f32, r: f32) -> f32 {
-    let c = clamp(s / r, -1.0, 1.0);
-    // a = acos(s/r) r^2 / 2 - s sqrt(r^2 - s^2) / 2; k = 2a / (pi r^2), in units of r.
-    let a = 0.5 * acos(c) - 0.5 * c * sqrt(max(1.0 - c * c, 0.0));
-    return clamp(2.0 * a / PI, 0.0, 1.0);
+// v / |v| without overflow or underflow for any finite v (zero for zero):
+// scaled by its largest component first, so that the squares stay near 1.
+fn unit(v: vec3<f32>) -> vec3<f32> {
+    let big = max(max(abs(v.x), abs(v.y)), abs(v.z));
+    if (big == 0.0) {
+        return v;
+    }
+    let w = v / big;
+    return w / length(w);
 }
 
+// k of Eq. 4.2 for the silhouette edge h0-h1 and the receiver p
+// (disk_fraction, Eq. 4.1, is in passes/shadow_test.wgsl).
 fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
     let r = pvm.center.w;
     let l = pvm.center.xyz;
@@ -35,10 +43,14 @@ fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
     // so that (h1 - h0) x (h0 - l), the hard-shadow plane's normal, points
     // away from the occluder; so does this normal, which turns continuously
     // with p through the hard-shadow plane.
-    let m = cross(h1 - h0, p - h0);
+    // Both factors are made unit first: the cross product of raw differences
+    // squares the scene's scale, and its length the square again, which
+    // overflows f32 beyond coordinates of about 1e9 (issue 22: visibility
+    // 1/2 everywhere in the volumes of a scene scaled by 1e10).
+    let m = cross(unit(h1 - h0), unit(p - h0));
     let len = length(m);
     // p on the edge's line: the plane is undefined; half the light is the limit.
-    if (len <= 1e-12 * max(dot(h1 - h0, h1 - h0), 1e-30)) {
+    if (len <= 1e-7) {
         return 0.5;
     }
     let n = m / len;
@@ -46,13 +58,14 @@ fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
     // occluder: the visible part of the disk is the part beyond the plane from
     // an occluded centre, so Eq. 4.1 applies with this s.
     let s = -(dot(n, l) - dot(n, h0));
-    let k = disk_fraction(s, r);
-    if ((pvm.mode.y & 1u) != 0u) {
-        // Parker et al.'s sinusoidal falloff, as the Bernstein interpolant (4.2).
-        return k * k * (3.0 - 2.0 * k);
-    }
-    return k;
+    return disk_fraction(s, r);
 }
+
+// How far (in k) a volume's visibility may disagree with the shadow-map test
+// at the light's centre before the volume is taken for another edge's: the
+// test and the volume map are rasterised separately, so within a texel or
+// two of the hard-shadow boundary they disagree by design.
+const CENTRE_TOLERANCE: f32 = 0.1;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -67,19 +80,57 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let p = pixel.p;
         let n = pixel.n;
         let cos_theta = light_cosine(pvm, p, n);
-        // Centre below the surface's horizon: the surface itself hides it.
+        let r = pvm.center.w;
+        let horizon = (pvm.mode.y & 4u) != 0u && r > 0.0;
+        // Repair "horizon" (beyond the paper, which takes the light's centre
+        // for the surface's horizon test): the fraction of the light above
+        // the receiver's tangent plane, by Eq. 4.1 with that plane as the
+        // cutting plane. It bounds the visibility; a receiver whose centre
+        // lies below its horizon sees that fraction of the light (other
+        // occluders of that sliver are not looked for: the shadow map from
+        // the centre cannot tell them from the receiver's own object).
+        var k_h = 1.0;
+        if (horizon) {
+            k_h = horizon_fraction(pvm, p, n);
+        }
+        // Centre below the surface's horizon: the surface itself hides it
+        // (and only the horizon's sliver of the light can be seen).
         if (cos_theta > 0.0) {
             let q = biased_receiver(pvm, p, n, cos_theta);
+            let centre_lit = q.w <= map_depth(pvm, shadow_map, q.xyz);
+            v = select(0.0, 1.0, centre_lit);
             // Listing 4.2: in a volume when the PVDM is nearer the light than the pixel.
             if (map_depth(pvm, volume_depth, q.xyz) < q.w) {
                 let m = light_map_point(pvm.light_space, q.xyz);
-                let t = map_texel(textureDimensions(edge0_map), m);
-                v = volume_visibility(p, textureLoad(edge0_map, t, m.layer, 0).xyz, textureLoad(edge1_map, t, m.layer, 0).xyz);
+                let t = map_texel(textureDimensions(edge_index), m);
+                // The depth map and the index map are written together: a
+                // texel behind a volume holds an index (clamped all the same).
+                let edge = edges[min(max(textureLoad(edge_index, t, m.layer, 0).x, 1u) - 1u, arrayLength(&edges) - 1u)];
+                var k = volume_visibility(p, edge.h0.xyz, edge.h1.xyz);
+                // Repair "centre" (beyond the paper): the volume nearest the
+                // light at this texel need not be the one that shadows p
+                // (4.3's overlap): a far edge's inner volume reaching past the
+                // occluder's other side, or another edge's volume over an
+                // umbra. k >= 1/2 means the centre is visible and k < 1/2 that
+                // it is hidden; where the shadow map's test at the centre says
+                // otherwise, the volume belongs to another edge and the test
+                // decides alone.
+                let agrees = select(k <= 0.5 + CENTRE_TOLERANCE, k >= 0.5 - CENTRE_TOLERANCE, centre_lit);
+                if ((pvm.mode.y & 2u) == 0u || agrees) {
+                    if ((pvm.mode.y & 1u) != 0u) {
+                        // Parker et al.'s sinusoidal falloff, as the Bernstein interpolant (4.2).
+                        k = k * k * (3.0 - 2.0 * k);
+                    }
+                    v = k;
+                }
                 inside = 1.0;
                 atomicAdd(&pixels_in_volume, 1u);
-            } else {
-                v = select(0.0, 1.0, q.w <= map_depth(pvm, shadow_map, q.xyz));
             }
+            if (horizon) {
+                v = min(v, k_h);
+            }
+        } else if (horizon) {
+            v = k_h;
         }
     }
     textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));

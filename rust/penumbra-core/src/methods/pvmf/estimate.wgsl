@@ -19,7 +19,8 @@ struct PvmfSettings {
     n_pcf: u32,
     seed: u32,
     // bit 0: disk kernel (else the paper's square); bit 1: skip pixels that
-    // fail the shadow-map test outside every volume (else filter them, 5.2).
+    // fail the shadow-map test outside every volume (else filter them, 5.2);
+    // bit 2: repair "horizon".
     flags: u32,
 };
 @group(0) @binding(7) var<storage, read> settings_params: PvmfSettings;
@@ -102,6 +103,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let p = pixel.p;
         let n = pixel.n;
         let cos_theta = light_cosine(pvmf, p, n);
+        // Repair "horizon" (beyond the paper, which takes the light's centre
+        // for the surface's horizon test): the part of the light below the
+        // receiver's tangent plane is hidden (horizon_fraction bounds v).
+        let horizon = (settings.flags & 4u) != 0u && pvmf.center.w > 0.0;
         // Centre below the surface's horizon: the surface itself hides it.
         if (cos_theta > 0.0) {
             let q = biased_receiver(pvmf, p, n, cos_theta);
@@ -134,6 +139,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 v = sum / f32(n_pcf * n_pcf);
                 blur = 1.0;
             }
+            if (horizon) {
+                v = min(v, horizon_fraction(pvmf, p, n));
+            }
+        } else if (horizon) {
+            // Only the sliver of the light above the horizon is seen; other
+            // occluders of it are not looked for (the map from the centre
+            // cannot tell them from the receiver's own object).
+            v = horizon_fraction(pvmf, p, n);
         }
     }
     textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));

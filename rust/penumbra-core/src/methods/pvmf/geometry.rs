@@ -22,7 +22,11 @@ pub enum Offsets {
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct MaskVertex {
     pub position: [f32; 3],
+    /// d_e of 5.1, the same on every corner (the mask pass reads it flat).
     pub d_e: f32,
+    /// With repair "distance": the distance from the light of the edge's end
+    /// this corner comes from, interpolated across the quadrilateral; 0 without.
+    pub d_local: f32,
 }
 
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -32,6 +36,9 @@ pub struct MaskStats {
     pub mask_quads: usize,
     /// Edges seen end-on from the light (no hard-shadow plane): no volume.
     pub light_parallel_edges: usize,
+    /// Silhouette edges hidden from the light's centre (no volume; counted
+    /// in `silhouette_edges`).
+    pub hidden_edges: usize,
 }
 
 /// The overestimated volume of one silhouette edge `a -> b` (5.1), as its
@@ -79,7 +86,16 @@ fn edge_volume(e: &SilhouetteEdge, l: DVec3, r: f64, s_e: f64, offsets: Offsets,
 
 /// The mask's quadrilaterals (as triangles) for every silhouette edge, each
 /// built independently of its neighbours (5.1).
-pub fn mask_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, s_e: f64, offsets: Offsets, reach: f64) -> (Vec<MaskVertex>, MaskStats) {
+///
+/// With `local_distance` (repair "distance", a departure from 5.1), each
+/// corner also carries the distance from the light of the edge's end it is
+/// extruded from, and the mask pass interpolates it across the quadrilateral:
+/// a texel's distance is that of the part of the edge its volume comes from.
+/// The paper's d_e, the nearer end's distance, is that of the top of a long
+/// edge that falls away from the light (a box's vertical edge): the filter
+/// near its foot is then as wide as under its top, and the shadow of an
+/// object standing on the ground shows no contact hardening.
+pub fn mask_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, s_e: f64, offsets: Offsets, reach: f64, local_distance: bool) -> (Vec<MaskVertex>, MaskStats) {
     let mut stats = MaskStats { silhouette_edges: edges.len(), ..Default::default() };
     let mut vertices = Vec::with_capacity(edges.len() * 12);
     for e in edges {
@@ -88,10 +104,13 @@ pub fn mask_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, s_e: f64, offset
             continue;
         };
         // d_e = min(|e0 - l|, |e1 - l|) of the original points (5.1).
-        let d_e = (e.a - l).length().min((e.b - l).length()) as f32;
-        for quad in quads {
+        let (d_a, d_b) = ((e.a - l).length() as f32, (e.b - l).length() as f32);
+        let d_e = d_a.min(d_b);
+        // Corners 0 and 1 of the outer quad come from a, 2 and 3 from b; the inner quad runs the other way.
+        for (quad, ends) in quads.into_iter().zip([[d_a, d_a, d_b, d_b], [d_b, d_b, d_a, d_a]]) {
             for k in [0, 1, 2, 0, 2, 3] {
-                vertices.push(MaskVertex { position: quad[k].as_vec3().to_array(), d_e });
+                let d_local = if local_distance { ends[k] } else { 0.0 };
+                vertices.push(MaskVertex { position: quad[k].as_vec3().to_array(), d_e, d_local });
             }
             stats.mask_quads += 1;
         }
@@ -174,10 +193,29 @@ mod tests {
         ];
         for s_e in [1e-6, 0.5, 1.0] {
             for offsets in [Offsets::Unit, Offsets::Radius] {
-                let (vertices, stats) = mask_volumes(&edges, l, 0.5, s_e, offsets, 10.0);
+                let (vertices, stats) = mask_volumes(&edges, l, 0.5, s_e, offsets, 10.0, true);
                 assert_eq!(stats.light_parallel_edges, 2);
                 assert_eq!(stats.mask_quads, 2);
                 assert!(vertices.iter().all(|v| v.position.iter().all(|c| c.is_finite()) && v.d_e > 0.0));
+            }
+        }
+    }
+
+    #[test]
+    fn local_distances_follow_the_edge_and_the_paper_keeps_the_nearer_end() {
+        // A vertical edge from the ground to 2 units up, under a light at 6.
+        let l = DVec3::new(0.0, 6.0, 0.0);
+        let e = edge([1.0, 0.0, 1.0], [1.0, 2.0, 1.0]);
+        let (d_a, d_b) = ((e.a - l).length() as f32, (e.b - l).length() as f32);
+        let (paper, _) = mask_volumes(&[e], l, 0.5, 0.02, Offsets::Radius, 10.0, false);
+        assert!(paper.iter().all(|v| v.d_e == d_b && v.d_local == 0.0), "the nearer end's distance, flat");
+        let (local, _) = mask_volumes(&[e], l, 0.5, 0.02, Offsets::Radius, 10.0, true);
+        // Outer quad: corners 0-1 from a, 2-3 from b; inner quad the other way.
+        let ends = [d_a, d_a, d_b, d_b, d_b, d_b, d_a, d_a];
+        for (quad, corner_ends) in local.chunks(6).zip(ends.chunks(4)) {
+            for (v, k) in quad.iter().zip([0, 1, 2, 0, 2, 3]) {
+                assert_eq!(v.d_local, corner_ends[k]);
+                assert_eq!(v.d_e, d_b);
             }
         }
     }

@@ -10,15 +10,19 @@ struct MaskVertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) light_depth: f32,
     @location(1) @interpolate(flat) d_e: f32,
+    // Repair "distance": the distance of the edge's point this part of the
+    // volume comes from (its ends' distances, interpolated); 0 without it.
+    @location(2) d_local: f32,
 };
 
 @vertex
-fn vs_mask(@location(0) position: vec3<f32>, @location(1) d_e: f32) -> MaskVertexOut {
+fn vs_mask(@location(0) position: vec3<f32>, @location(1) d_e: f32, @location(2) d_local: f32) -> MaskVertexOut {
     var out: MaskVertexOut;
     let p = vec4<f32>(position, 1.0);
     out.clip = shadow.view_proj * p;
     out.light_depth = -(shadow.view * p).z;
     out.d_e = d_e;
+    out.d_local = d_local;
     return out;
 }
 
@@ -32,6 +36,6 @@ fn fs_mask(in: MaskVertexOut) -> MaskOut {
     var out: MaskOut;
     // far > 0 by construction of the frustum.
     out.depth = clamp(in.light_depth / shadow.depth.y, 0.0, 1.0);
-    out.d_e = in.d_e;
+    out.d_e = select(in.d_e, in.d_local, in.d_local > 0.0);
     return out;
 }

@@ -153,6 +153,13 @@ pub fn light_samples(center: DVec3, radius: f64, axis: DVec3, n: u32, seed: u64)
 ///   `z = 1 - rho^2 (1 - cos_max)`), for what off-axis receivers see beyond
 ///   the hemisphere and so that no weight is unbounded near its rim.
 ///
+/// A light inside the scene's bounding sphere (`cos_max = -1`: a room, a
+/// floor wider than the light is high) is seen from every side, and half of
+/// the samples are uniform over the whole sphere (measured with
+/// benchmarks/omnidirectional.py's scenes: penumbra RMSE at 64 samples
+/// against Mitsuba, 1/8 uniform, 1/2, all uniform: Sponza 0.238, 0.106,
+/// 0.101; Cornell box 0.042, 0.029, 0.050; wide floor 0.027, 0.027, 0.062).
+///
 /// Each sample's weight is 1 / (n_c p_c(s) + n_u p_u(s)), the balance
 /// heuristic over both sets (Veach's multi-sample estimator), with
 /// p_c = max(cos_a, 0) / pi and p_u = 1 / (2 pi (1 - cos_max)) per unit area
@@ -164,7 +171,11 @@ pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: 
     }
     let cos_max = cos_max.clamp(-1.0, 0.0);
     let (e1, e2) = axis.any_orthonormal_pair();
-    let n_u = n.div_ceil(8).max(1);
+    // A light inside the scene's bounding sphere is seen from every side: no
+    // hemisphere faces all receivers, and the cosine set would leave those
+    // beside or above it with few samples. Half are then uniform.
+    let surrounded = cos_max <= -1.0;
+    let n_u = if surrounded { n.div_ceil(2).max(1) } else { n.div_ceil(8).max(1) };
     let cosine = if n > n_u { jittered_grid(n - n_u, seed) } else { Vec::new() };
     let uniform = jittered_grid(n_u, seed ^ 0xA5A5_5A5A);
     let (count_c, count_u) = (cosine.len() as f64, uniform.len() as f64);
