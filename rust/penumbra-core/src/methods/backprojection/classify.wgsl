@@ -78,7 +78,6 @@ fn kernel_bounds(r: BpReceiver, level: u32, h: f32) -> vec2<f32> {
     for (var j = lo.y; j <= hi.y; j++) {
         for (var i = lo.x; i <= hi.x; i++) {
             let t = vec2<i32>(i, j);
-            atomicAdd(&counters[15], 1u);
             let b = map_bounds(r.layer, li, t, true);
             z_min = min(z_min, b.x);
             if (b.x >= r.depth - r.bias) {
@@ -188,7 +187,6 @@ fn classify(r: BpReceiver) -> Classified {
     var b = vec2<f32>(z_min, f32(MIXED));
     var level = 0u;
     for (var k = 0; k < 8; k++) {
-        atomicAdd(&counters[16], 1u);
         level = bounds_level(h);
         b = kernel_bounds(r, level, h);
         if (u32(b.y) != MIXED) {
