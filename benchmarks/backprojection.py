@@ -20,7 +20,8 @@ Columns (as benchmarks/real_meshes.py):
 
 `backprojection` runs four ways: the faithful defaults (both adaptive
 strategies on), light-space multi-resolution (5.1) off, screen-space
-multi-resolution (5.2) off, both off. Then the issue's targets per
+multi-resolution (5.2) off, both off, and t_k = 16 (5.1 on, levels one
+finer than the paper's t_k = 8). Then the issue's targets per
 configuration (worst scene), and a light-radius sweep on cube_on_plane.
 
     python benchmarks/backprojection.py [--size 128] [--spp 1024] [--repeats 3] [--meshes ../shared/meshes] [--skip builtin real open sweep]
@@ -48,6 +49,7 @@ BP_CONFIGS: list[tuple[str, dict[str, Any]]] = [
     ("5.1 off", {"light_adaptive": False}),
     ("5.2 off", {"screen_adaptive": False}),
     ("both off", {"light_adaptive": False, "screen_adaptive": False}),
+    ("t_k=16", {"t_k": 16.0}),
 ]
 CONFIGS: list[tuple[str, str, dict[str, Any]]] = [
     ("hard", "defaults", {}),
