@@ -84,24 +84,36 @@ def test_renders_with_its_passes_stats_and_intermediates(renderer: penumbra.Rend
         assert ((v >= 0) & (v <= 1)).all()
 
 
-def test_a_single_edge_follows_the_exact_disk_coverage(renderer: penumbra.Renderer) -> None:
-    scene = edge_scene(0.3)
-    result = renderer.render(scene, "backprojection")
+def edge_errors(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str = "backprojection", **params: object) -> np.ndarray:
+    result = renderer.render(scene, method, **params)
     exact = exact_edge_visibility(scene)
     floor = result.object_id == 0
-    penumbra_px = floor & (exact > 0.02) & (exact < 0.98)
-    assert penumbra_px.sum() > 300  # the penumbra spans many pixels
-    err = result.visibility[penumbra_px] - exact[penumbra_px]
-    # Measured: RMSE 0.0xx, max 0.0xx (the map's texels, 1024 over the
-    # frustum; the slab's 0.01 thickness moves the edge by 0.005).
-    assert np.sqrt(np.mean(err**2)) < 0.02
-    assert np.abs(err).max() < 0.08
+    region = floor & (exact > 0.02) & (exact < 0.98)
+    assert region.sum() > 1000  # the penumbra spans many pixels
     # Away from the penumbra: fully lit or in umbra, as the closed form says.
-    lit = floor & (exact >= 1.0)
-    assert (result.visibility[lit] > 0.98).mean() > 0.99
-    # For contrast, pcss's error on the same edge is larger.
-    pcss = renderer.render(scene, "pcss")
-    assert np.sqrt(np.mean((pcss.visibility[penumbra_px] - exact[penumbra_px]) ** 2)) > 2 * np.sqrt(np.mean(err**2))
+    assert (result.visibility[floor & (exact >= 1.0)] > 0.98).mean() > 0.99
+    return np.asarray(result.visibility[region] - exact[region], dtype=np.float64)
+
+
+def rms(e: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(e**2)))
+
+
+def test_a_single_edge_follows_the_exact_disk_coverage(renderer: penumbra.Renderer) -> None:
+    scene = edge_scene(0.3)
+    # Level 0 (5.1 off): measured RMSE 0.0068, max 0.021 (map_size 1024;
+    # 0.0011 to 0.0068 as the edge moves across a texel).
+    level0 = edge_errors(renderer, scene, light_adaptive=False)
+    assert rms(level0) < 0.015 and np.abs(level0).max() < 0.04
+    # The faithful defaults compute this penumbra at levels 2 and 3, whose
+    # min-depth samples grow the edge more than t = 1 shrinks it back:
+    # measured RMSE 0.027, a darkening bias of 0.026
+    # (docs/methods/backprojection.md).
+    defaults = edge_errors(renderer, scene)
+    assert rms(defaults) < 0.04
+    # pcss, for scale (measured RMSE 0.045): larger than both.
+    pcss = rms(edge_errors(renderer, scene, "pcss"))
+    assert pcss > 4 * rms(level0) and pcss > rms(defaults)
 
 
 @pytest.mark.parametrize("name", penumbra.scenes.names())
@@ -121,18 +133,15 @@ def test_t_shrinks_and_grows_the_contour(renderer: penumbra.Renderer) -> None:
     # (larger), t = 0 on the samples' borders. A tiny light and a coarse map
     # make the half-texel shifts visible in pixels.
     scene = penumbra.scenes.get("cube_on_plane", width=128, height=128, light_radius=0.01)
-    shadow = {}
-    for t in (-1.0, 0.0, 1.0):
-        v = renderer.render(scene, "backprojection", t=t, map_size=64, light_adaptive=False).visibility
-        shadow[t] = float((1.0 - v)[scene_floor(renderer, scene)].sum())
-    assert shadow[1.0] < shadow[0.0] < shadow[-1.0]
-    # Each step moves the contour by half a texel: about the same amount.
-    grow, shrink = shadow[-1.0] - shadow[0.0], shadow[0.0] - shadow[1.0]
+    floor = renderer.render(scene, "hard").object_id == 0
+    ts = (-1.0, -0.5, 0.0, 0.5, 1.0)
+    shadow = [float((1.0 - renderer.render(scene, "backprojection", t=t, map_size=64, light_adaptive=False).visibility)[floor].sum()) for t in ts]
+    assert all(a > b for a, b in zip(shadow, shadow[1:])), shadow
+    # Each unit of t moves the contour by half a texel: growing by t = -1
+    # and shrinking by t = 1 change the shadow by about as much (measured
+    # +84 and -71 pixels' worth).
+    grow, shrink = shadow[0] - shadow[2], shadow[2] - shadow[4]
     assert 0.5 < grow / shrink < 2.0
-
-
-def scene_floor(renderer: penumbra.Renderer, scene: penumbra.Scene) -> np.ndarray:
-    return renderer.render(scene, "hard").object_id == 0
 
 
 @pytest.mark.parametrize("adaptive", [True, False])
@@ -145,7 +154,7 @@ def test_grazing_receivers_and_depth_discontinuities_stay_in_range(renderer: pen
         box((0.8, 1.5, 0.6), (0.6, 0.1, 0.6), yaw_degrees=20, object_id=2, name="floating"),
     ]
     camera = penumbra.Camera(eye=(0.0, 4.0, 5.0), target=(0.0, 0.0, 0.0), fov_y=50.0, width=96, height=96)
-    for center, radius in (((-4.0, 0.05, 0.0), 0.2), ((-3.0, 0.4, 0.5), 0.5), ((0.0, 3.0, 0.0), 1.5)):
+    for center, radius in (((-4.0, 0.25, 0.0), 0.2), ((-3.0, 0.6, 0.5), 0.5), ((0.0, 3.0, 0.0), 1.2)):
         scene = penumbra.Scene([ground_plane(), *casters], penumbra.SphereLight(center, radius, intensity=10.0), camera)
         result = renderer.render(scene, "backprojection", light_adaptive=adaptive, screen_adaptive=adaptive, s_min=4.0)
         v = result.visibility
@@ -154,16 +163,15 @@ def test_grazing_receivers_and_depth_discontinuities_stay_in_range(renderer: pen
 
 
 def test_pull_push_does_not_bleed_across_object_boundaries(renderer: penumbra.Renderer) -> None:
-    # A large light and a small s_min: most penumbra pixels are skipped and
+    # A large light and a small s_min: penumbra pixels are skipped and
     # reconstructed by pull-push (5.2). Pixels along an object boundary lie
-    # on the discontinuity buffer and are computed, not interpolated: near
-    # boundaries the reconstruction matches the full computation as well as
-    # elsewhere does.
+    # on the discontinuity buffer, so they are computed, never interpolated
+    # from another surface: there they equal the full computation exactly.
     scene = penumbra.scenes.get("overlapping_casters", width=128, height=128, light_radius=0.6)
     full = renderer.render(scene, "backprojection", screen_adaptive=False)
-    sparse = renderer.render(scene, "backprojection", s_min=2.0, intermediates=True)
+    sparse = renderer.render(scene, "backprojection", s_min=1.0, intermediates=True)
     s = sparse.stats
-    assert s["penumbra_skipped"] > 0.3 * s["penumbra_pixels"]
+    assert s["penumbra_skipped"] > 0.15 * s["penumbra_pixels"]  # measured 1252 of 6010
     assert s["penumbra_on_discontinuities"] > 0
     ids = sparse.object_id
     boundary = np.zeros(ids.shape, dtype=bool)
@@ -172,8 +180,10 @@ def test_pull_push_does_not_bleed_across_object_boundaries(renderer: penumbra.Re
     boundary[1:, :] |= ids[1:, :] != ids[:-1, :]
     boundary[:-1, :] |= ids[1:, :] != ids[:-1, :]
     boundary &= ids >= 0
-    # The discontinuity buffer covers the boundaries.
-    assert (sparse.images["backprojection_discontinuities"][boundary] > 0).mean() > 0.95
+    assert (sparse.images["backprojection_discontinuities"][boundary] > 0).all()
     diff = np.abs(sparse.visibility - full.visibility)
-    assert diff[boundary].max() < 0.05
+    assert diff[boundary].max() < 1e-6
+    # Elsewhere the reconstruction is close (measured mean 0.0045).
     assert diff[ids >= 0].mean() < 0.02
+    skipped = sparse.images["backprojection_class"] == 4
+    assert diff[skipped].max() > 0  # the skipped pixels were interpolated, not computed

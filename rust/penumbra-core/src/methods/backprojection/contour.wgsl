@@ -508,6 +508,11 @@ fn block_edges(r: BpReceiver, blk: Block, t: f32, probe: vec2<f32>, test: bool) 
     } else if (count == 3u) {
         let k = firstTrailingBit(~m & 15u);
         add_edge(r, &res, blk, f, (k + 3u) % 4u, k, (k + 1u) % 4u, k, probe, test);
+        // t = -1 grows the occluders onto the lone background sample's
+        // centre: no edge, and the whole block (but that point) is inside.
+        if (test && res.edges == 0u) {
+            res.inside = true;
+        }
     } else if (m == 5u || m == 10u) {
         let k = firstTrailingBit(m);
         add_edge(r, &res, blk, f, k, (k + 1u) % 4u, k, (k + 3u) % 4u, probe, test);
