@@ -22,9 +22,11 @@ Columns (as benchmarks/real_meshes.py):
 strategies on), light-space multi-resolution (5.1) off, screen-space
 multi-resolution (5.2) off, both off, and t_k = 16 (5.1 on, levels one
 finer than the paper's t_k = 8). Then the issue's targets per
-configuration (worst scene), and a light-radius sweep on cube_on_plane.
+configuration (worst scene), a light-radius sweep on cube_on_plane, and
+one straight edge against the exact disk coverage as it moves across a
+coarse texel.
 
-    python benchmarks/backprojection.py [--size 128] [--spp 1024] [--repeats 3] [--meshes ../shared/meshes] [--skip builtin real open sweep]
+    python benchmarks/backprojection.py [--size 128] [--spp 1024] [--repeats 3] [--meshes ../shared/meshes] [--skip builtin real open sweep edge]
 """
 
 from __future__ import annotations
@@ -140,13 +142,39 @@ def sweep(renderer: penumbra.Renderer, args: argparse.Namespace) -> None:
         print(f"| {radius} | {hard['penumbra']} | " + " | ".join(cells) + f" | {levels} |", flush=True)
 
 
+def edge(renderer: penumbra.Renderer) -> None:
+    """The single straight edge of tests/test_backprojection.py against the
+    exact disk coverage, the edge moved across a level-2 texel in 8 steps."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from test_backprojection import edge_scene, exact_edge_visibility
+
+    print("\nOne straight edge against the exact disk coverage (96x96): mean error and RMSE over the penumbra as the edge moves\n")
+    print("| settings | levels | mean error per offset | mean of means | RMSE per offset |")
+    print("|---|---|---|---|---|")
+    for label, params in (("5.1 off", {"light_adaptive": False}), ("defaults", {}), ("t_k=4", {"t_k": 4.0})):
+        means, rmses, levels = [], [], set()
+        for x in np.linspace(0.0, 0.032, 9)[:-1]:
+            scene = edge_scene(0.3, edge_x=float(x))
+            exact = exact_edge_visibility(scene, float(x))
+            result = renderer.render(scene, "backprojection", **params)
+            region = (result.object_id == 0) & (exact > 0.02) & (exact < 0.98)
+            err = result.visibility[region] - exact[region]
+            means.append(float(err.mean()))
+            rmses.append(float(np.sqrt(np.mean(err**2))))
+            levels |= {level for level in range(8) if result.stats[f"level_{level}_pixels"]}
+        fmt = lambda xs: " ".join(f"{x:+.3f}" for x in xs)  # noqa: E731
+        print(f"| {label} | {sorted(levels)} | {fmt(means)} | {np.mean(means):+.4f} | {' '.join(f'{x:.3f}' for x in rmses)} |", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--size", type=int, default=128)
     parser.add_argument("--spp", type=int, default=1024)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--meshes", type=Path, default=MESHES)
-    parser.add_argument("--skip", nargs="*", default=[], choices=["builtin", "real", "open", "sweep"], help="parts to leave out")
+    parser.add_argument("--skip", nargs="*", default=[], choices=["builtin", "real", "open", "sweep", "edge"], help="parts to leave out")
     args = parser.parse_args()
     renderer = penumbra.Renderer(pass_cache=False)
     print(f"adapter {renderer.adapter_info['name']}; {args.size}x{args.size}; ground truth Mitsuba {pm.variant()} visibility at {args.spp} samples, noise from a second seed; median of {args.repeats} renders\n")
@@ -165,6 +193,8 @@ def main() -> None:
         targets(table(renderer, scenes, args))
     if "sweep" not in args.skip:
         sweep(renderer, args)
+    if "edge" not in args.skip:
+        edge(renderer)
 
 
 if __name__ == "__main__":
