@@ -1,6 +1,7 @@
-"""Render methods and Mitsuba ground truth of the same scene, measure, time,
-and draw them: ``penumbra.compare(...)`` (one method, side by side),
-:func:`compare_methods` and ``penumbra compare`` (every method, one picture).
+"""Render methods and ground truth of the same scene (Mitsuba, or the
+engine's ``raytraced`` at a high sample count), measure, time, and draw them:
+``penumbra.compare(...)`` (one method, side by side), :func:`compare_methods`
+and ``penumbra compare`` (every method, one picture).
 
 Times are warm: one untimed warm-up render, then the median of ``repeats``
 timed renders, each the wall clock of the whole render call (scene upload,
@@ -141,6 +142,22 @@ class Comparison:
         comparison_figure(self, path)
 
 
+def _truth(
+    truth: str, scene: Scene, camera: Camera | None, spp: int, seed: int, noise_seed: int | None,
+    cache_dir: str | os.PathLike[str] | None, renderer: Renderer,
+) -> GroundTruth:
+    """The ground truth ``truth`` names: ``"mitsuba"`` (cached under
+    ``cache_dir``) or ``"raytraced"`` (:func:`penumbra.truth.raytraced_truth`
+    at ``spp`` light samples, not cached)."""
+    from penumbra.truth import TRUTHS, raytraced_truth
+
+    if truth not in TRUTHS:
+        raise ParameterError(f"truth must be one of {list(TRUTHS)}, got {truth!r}")
+    if truth == "raytraced":
+        return raytraced_truth(scene, camera, n_samples=spp, seed=seed, noise_seed=noise_seed, renderer=renderer)
+    return ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
+
+
 def compare(
     scene: Scene,
     method: str = "hard",
@@ -153,18 +170,25 @@ def compare(
     cache_dir: str | os.PathLike[str] | None = None,
     out: str | os.PathLike[str] | None = None,
     repeats: int = DEFAULT_REPEATS,
+    truth: str = "mitsuba",
     **params: Any,
 ) -> Comparison:
-    """Renders ``scene`` with ``method`` (and its ``params``) and with Mitsuba
-    (radiance and visibility at ``spp``; with ``noise_seed`` a second ground
-    truth for the noise floor), computes every metric of :mod:`penumbra.metrics`,
-    times the method (:func:`timed_render`: a warm-up, then the median of
-    ``repeats``), and writes the side-by-side picture to ``out`` when given."""
+    """Renders ``scene`` with ``method`` (and its ``params``) and the ground
+    truth (radiance and visibility at ``spp`` samples per pixel; with
+    ``noise_seed`` a second ground truth for the noise floor), computes every
+    metric of :mod:`penumbra.metrics`, times the method (:func:`timed_render`:
+    a warm-up, then the median of ``repeats``), and writes the side-by-side
+    picture to ``out`` when given.
+
+    ``truth``: ``"mitsuba"`` (the independent default, cached under
+    ``cache_dir``) or ``"raytraced"``: the engine's own method ``raytraced`` at
+    ``spp`` light samples (:func:`penumbra.truth.raytraced_truth`; give it
+    thousands: 4096 for a noise floor near Mitsuba's at 1024), not cached."""
     if not isinstance(scene, Scene):
         raise SceneError(f"expected a penumbra.Scene, got {type(scene).__name__}")
     renderer = renderer or timing_renderer()
     result, timing = timed_render(renderer, scene, method, repeats=repeats, camera=camera, **params)
-    gt = ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
+    gt = _truth(truth, scene, camera, spp, seed, noise_seed, cache_dir, renderer)
     comparison = Comparison(result, gt, metrics_module.compare(result, gt), timing)
     if out is not None:
         comparison.save_figure(out)
@@ -219,6 +243,24 @@ def comparison_figure(c: Comparison, path: str | os.PathLike[str]) -> None:
 
 # ---------------------------------------------------------------------------
 # Every method at once: ``penumbra compare``.
+
+
+def _params_per_method(names: list[str], params: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """``params`` split by method: each method gets those it declares (an
+    unimplemented method gets them all, and refuses itself); a parameter no
+    method declares is refused here, naming it."""
+    from penumbra.render import method_info
+
+    declared: dict[str, set[str] | None] = {}
+    for name in names:
+        try:
+            declared[name] = set(method_info(name).defaults())
+        except ParameterError:
+            declared[name] = None
+    unused = [k for k in params if not any(d is None or k in d for d in declared.values())]
+    if unused:
+        raise ParameterError(f"unknown parameter(s) {unused}: declared by none of the methods compared ({names}); see penumbra.method_info")
+    return {name: {k: v for k, v in params.items() if d is None or k in d} for name, d in declared.items()}
 
 
 def _default_order() -> list[str]:
@@ -336,11 +378,15 @@ def compare_methods(
     cache_dir: str | os.PathLike[str] | None = None,
     out: str | os.PathLike[str] | None = None,
     progress: Callable[[str], None] | None = None,
+    truth: str = "mitsuba",
 ) -> MethodComparison:
     """Every method in ``methods`` (default: every implemented one,
     ``reference`` last) against Mitsuba ground truth of ``scene``, each timed
     with :func:`timed_render` (``repeats``, ``budget_s``) in this one run, ``hard`` too (the time ratios'
-    baseline) when it is not among them. ``params`` go to every method.
+    baseline) when it is not among them. ``params`` go to every method that
+    declares them (``map_size`` to the shadow-mapped ones, not to
+    ``raytraced``); one that no method compared declares is a
+    :class:`~penumbra.errors.ParameterError`.
 
     When more than one method is asked, a method that refuses the scene or the
     parameters (a :class:`~penumbra.errors.InvalidInputError`) is skipped
@@ -359,6 +405,7 @@ def compare_methods(
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
         raise ParameterError(f"repeats must be an integer of at least 1, got {repeats!r}")
     params = dict(params or {})
+    own = _params_per_method(names, params)
     say = progress or (lambda line: None)
     renderer = renderer or timing_renderer()
     camera = camera or scene.camera
@@ -377,7 +424,7 @@ def compare_methods(
         role = "" if name in names else ", the time baseline, with its defaults"
         say(f"{name} ({i}/{len(timed_names)}{role}): warm-up render")
         try:
-            warm[name] = _uncached_render(renderer, scene, name, camera, params if name in names else {})
+            warm[name] = _uncached_render(renderer, scene, name, camera, own[name] if name in names else {})
         except InvalidInputError as e:
             if len(names) == 1:
                 raise
@@ -402,7 +449,7 @@ def compare_methods(
             break
         say(f"timed round {round_}/{repeats}: {', '.join(active)}")
         for name in active:
-            last[name] = _uncached_render(renderer, scene, name, camera, params if name in names else {})
+            last[name] = _uncached_render(renderer, scene, name, camera, own[name] if name in names else {})
             timed[name].append(last[name].total_ms)
     timings = {name: Timing(cold[name], timed[name], last[name].timing_source) for name in warm}
     for name in warm:
@@ -411,8 +458,8 @@ def compare_methods(
     baseline = timings["hard"]
 
     started = time.perf_counter()
-    say(f"ground truth: Mitsuba, {spp} spp, two seeds (cached after the first run)")
-    gt = ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
+    say(f"ground truth: {truth}, {spp} spp, two seeds" + (" (cached after the first run)" if truth == "mitsuba" else ""))
+    gt = _truth(truth, scene, camera, spp, seed, noise_seed, cache_dir, renderer)
     cached = all(gt.cached.values()) and (gt.second is None or all(gt.second.cached.values()))
     say(f"ground truth: {gt.variant}, {'read from the cache' if cached else 'rendered'} in {time.perf_counter() - started:.1f} s")
     rows = [Comparison(result, gt, _with_cast_shadows(metrics_module.compare(result, gt), result, gt, scene), timing)
