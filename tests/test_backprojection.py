@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
 import penumbra
-from penumbra.analytic import camera_rays, plane_hits
+from penumbra.analytic import plane_hits
 from penumbra.scenes import box, ground_plane
 
 CLASSES = ("lit_pixels", "umbra_pixels", "penumbra_pixels")
@@ -84,7 +86,7 @@ def test_renders_with_its_passes_stats_and_intermediates(renderer: penumbra.Rend
         assert ((v >= 0) & (v <= 1)).all()
 
 
-def edge_errors(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str = "backprojection", **params: object) -> np.ndarray:
+def edge_errors(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str = "backprojection", **params: Any) -> np.ndarray:
     result = renderer.render(scene, method, **params)
     exact = exact_edge_visibility(scene)
     floor = result.object_id == 0
@@ -201,9 +203,22 @@ def test_pull_push_does_not_bleed_across_object_boundaries(renderer: penumbra.Re
         ({"light_adaptive": "yes"}, ["light_adaptive"]),
     ],
 )
-def test_bad_parameters_raise_parameter_error(renderer: penumbra.Renderer, params: dict[str, object], words: list[str]) -> None:
+def test_bad_parameters_raise_parameter_error(renderer: penumbra.Renderer, params: dict[str, Any], words: list[str]) -> None:
     scene = penumbra.scenes.get("cube_on_plane", width=32, height=32)
     with pytest.raises(penumbra.ParameterError) as info:
         renderer.render(scene, "backprojection", **params)
     for word in words:
         assert word in str(info.value)
+
+
+def test_auto_map_size_and_visibility_only_output(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get("cube_on_plane", width=64, height=64)
+    auto = renderer.render(scene, "backprojection", map_size="auto")
+    # The hierarchy follows the resolved size: log2(map_size) + 1 levels.
+    assert auto.stats["map_size_auto"] == 1
+    assert 2 ** (auto.stats["hierarchy_levels"] - 1) == auto.stats["map_size"]
+    assert np.isfinite(auto.visibility).all()
+    full = renderer.render(scene, "backprojection")
+    only = renderer.render(scene, "backprojection", outputs=["visibility"])
+    assert np.array_equal(only.visibility, full.visibility)
+    assert "shading" not in only.timings
