@@ -53,6 +53,12 @@ pub const FILES: &[(&str, &str)] = &[
     ("methods/pvmf/mask.wgsl", include_str!("methods/pvmf/mask.wgsl")),
     ("methods/pvmf/estimate.wgsl", include_str!("methods/pvmf/estimate.wgsl")),
     ("methods/pvmf/blur.wgsl", include_str!("methods/pvmf/blur.wgsl")),
+    ("methods/backprojection/hierarchy.wgsl", include_str!("methods/backprojection/hierarchy.wgsl")),
+    ("methods/backprojection/contour.wgsl", include_str!("methods/backprojection/contour.wgsl")),
+    ("methods/backprojection/discontinuity.wgsl", include_str!("methods/backprojection/discontinuity.wgsl")),
+    ("methods/backprojection/classify.wgsl", include_str!("methods/backprojection/classify.wgsl")),
+    ("methods/backprojection/visibility.wgsl", include_str!("methods/backprojection/visibility.wgsl")),
+    ("methods/backprojection/pull_push.wgsl", include_str!("methods/backprojection/pull_push.wgsl")),
 ];
 
 const IMPORT: &str = "#import ";
@@ -184,7 +190,7 @@ macro_rules! gpu_struct {
 
 /// Every Rust struct a pass uploads for a shader, with its WGSL twin.
 pub fn gpu_structs() -> Vec<GpuStruct> {
-    use crate::methods::{adaptive, pcf, pcss, pvm, pvmf, raytraced, reference};
+    use crate::methods::{adaptive, backprojection, pcf, pcss, pvm, pvmf, raytraced, reference};
     use crate::passes::{gbuffer, shading, shadow_map, shadow_test};
     vec![
         gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
@@ -201,6 +207,16 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
         gpu_struct!(raytraced::SampleUniform => "LightSample" in "methods/raytraced/visibility.wgsl" { position, normal }),
         gpu_struct!(pvmf::SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags }),
         gpu_struct!(pvmf::BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),
+        gpu_struct!(backprojection::BackprojectionUniform => "Backprojection" in "methods/backprojection/contour.wgsl" {
+            t, t_k, beta, s_min, eye, flags, levels, max_kernel, pad, level_offset, level_size
+        }),
+        gpu_struct!(backprojection::HierarchyLevelUniform => "HierarchyLevel" in "methods/backprojection/hierarchy.wgsl" {
+            level, size, below_size, offset, below_offset, layers, active_layers, far
+        }),
+        gpu_struct!(backprojection::DiscontinuityUniform => "DiscontinuityStep" in "methods/backprojection/discontinuity.wgsl" { mode, radius, pad0, pad1 }),
+        gpu_struct!(backprojection::PullPushUniform => "PullPushStep" in "methods/backprojection/pull_push.wgsl" {
+            mode, width, height, offset, other_width, other_height, other_offset, pad
+        }),
     ]
 }
 

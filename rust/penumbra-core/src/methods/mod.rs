@@ -14,6 +14,7 @@ use crate::gpu::pool::{PooledTexture, ResourcePool};
 use crate::pass_cache::CachedPass;
 
 pub mod adaptive;
+pub mod backprojection;
 pub mod hard;
 pub mod params;
 pub mod pcf;
@@ -121,6 +122,7 @@ pub static REGISTRY: &[Registered] = &[
     entry::<adaptive::AdaptiveShadows>(),
     entry::<pvm::PenumbraVolumeMaps>(),
     entry::<pvmf::PenumbraVolumeMaskFiltering>(),
+    entry::<backprojection::SoftShadowBackprojection>(),
     entry::<raytraced::RaytracedShadows>(),
 ];
 

@@ -81,6 +81,25 @@ impl ScreenPass {
         layout::dispatch_per_pixel_writes(encoder, self.label, pipeline, bind_group, size, timestamps);
     }
 
+    /// Runs entry point `entry` over the workgroup counts (x, y, z) that an
+    /// earlier pass wrote into `indirect` at `offset`: a pass over a list of
+    /// pixels rather than the whole image.
+    pub fn dispatch_indirect(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        entry: &str,
+        bind_group: &wgpu::BindGroup,
+        indirect: &wgpu::Buffer,
+        offset: u64,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        let pipeline = &self.pipelines.iter().find(|(e, _)| *e == entry).unwrap_or_else(|| panic!("{}: no entry point {entry}", self.label)).1;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(self.label), timestamp_writes });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups_indirect(indirect, offset);
+    }
+
     /// Binds `resources` and runs the first entry point: the whole of a
     /// one-dispatch pass.
     pub fn run(

@@ -1,0 +1,99 @@
+#import methods/backprojection/contour.wgsl
+
+// Method `backprojection`, pass 2 of its v-buffer (section 6): the
+// visibility of every penumbra pixel the classification selected, one
+// invocation per listed pixel (an indirect dispatch: the cost follows the
+// penumbra's area, not the image's). Contour edges and radial integration
+// (4.1, 4.2) at the level the classification chose, blended with the
+// neighbouring level near a level transition (5.1, the paper's listing).
+
+struct PixelList {
+    groups: array<u32, 3>,
+    count: u32,
+    pixels: array<u32>,
+};
+
+@group(0) @binding(6) var kernel_in: texture_2d<f32>;
+@group(0) @binding(7) var level_in: texture_2d<f32>;
+@group(0) @binding(8) var<storage, read> list: PixelList;
+@group(0) @binding(9) var visibility_out: texture_storage_2d<r32float, write>;
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>, 19>;
+
+const C_EDGES: u32 = 6u;
+const C_BLENDED: u32 = 7u;
+const C_FALLBACKS: u32 = 17u;
+// Levels a kernel crossing a cube face's edge goes down (see `main`).
+const CROSSING_LEVELS: u32 = 2u;
+
+
+@compute @workgroup_size(64)
+fn main(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    load_params();
+    let index = (group.y * groups.x + group.x) * 64u + local;
+    if (index >= list.count) {
+        return;
+    }
+    let packed = list.pixels[index];
+    let px = vec2<i32>(i32(packed & 0xffffu), i32(packed >> 16u));
+    let p = textureLoad(gbuffer_position, px, 0).xyz;
+    let n = textureLoad(gbuffer_normal, px, 0).xyz;
+    let r = with_disk_frame(bp_receiver(p, n));
+    let h0 = textureLoad(kernel_in, px, 0).r;
+    let code = textureLoad(level_in, px, 0).r;
+    let top = bp.levels - 1u;
+    var lod = min(u32(max(floor(code), 0.0)), top);
+    let d = code - floor(code);
+    // Near a contact, a coarse level's samples (each the minimum depth of
+    // its footprint) can cover p' where the map does not, or the reverse:
+    // its contour then puts the light's centre on the wrong side and the
+    // integral is off by the whole disk. Where the centre test of the chosen
+    // level disagrees with level 0's, the level goes down until they agree
+    // (within MAX_FALLBACK times the kernel cap), without blending.
+    // On a cube, a coarse sample beyond the face reads the neighbour face's
+    // texel holding its centre, whose footprint there is turned and
+    // stretched against the sample's: a kernel crossing a face edge goes
+    // down CROSSING_LEVELS levels the same way.
+    let inside0 = centre_inside(r, 0u);
+    var fell = false;
+    let size = shadow.light_space.depth.z;
+    let crosses = is_cube(shadow.light_space) && (any(r.coords - h0 < vec2<f32>(0.0)) || any(r.coords + h0 > vec2<f32>(size)));
+    let cross_level = select(lod, lod - min(lod, CROSSING_LEVELS), crosses);
+    while (lod > 0u && 2.0 * h0 / f32(1u << (lod - 1u)) <= MAX_FALLBACK * bp.max_kernel && (lod > cross_level || centre_inside(r, lod) != inside0)) {
+        lod -= 1u;
+        fell = true;
+    }
+    if (fell) {
+        atomicAdd(&counters[C_FALLBACKS], 1u);
+    }
+    var vis = visibility(r, lod, h0);
+    var v = vis.v;
+    var edges = vis.edges;
+    // 5.1, the paper's listing: within beta of a level transition, halfway
+    // there a mix of the two levels. (Its second weight, (d / beta) / 2, is
+    // read as (1 - (1 - d) / beta) / 2, the weight that joins the first one
+    // at the transition.)
+    let beta = bp.beta;
+    if ((bp.flags & LIGHT_ADAPTIVE) != 0u && beta > 0.0 && !fell) {
+        var other_level = lod;
+        var weight = 0.0;
+        if (d < beta && lod > 0u) {
+            other_level = lod - 1u;
+            weight = 0.5 * (1.0 - d / beta);
+        } else if (1.0 - d < beta && lod < top) {
+            other_level = lod + 1u;
+            weight = 0.5 * (1.0 - (1.0 - d) / beta);
+        }
+        if (other_level != lod && centre_inside(r, other_level) == inside0) {
+            let other = visibility(r, other_level, h0);
+            v = mix(v, other.v, weight);
+            edges += other.edges;
+            atomicAdd(&counters[C_BLENDED], 1u);
+        }
+    }
+    atomicAdd(&counters[C_EDGES], edges);
+    textureStore(visibility_out, px, vec4<f32>(clamp(v, 0.0, 1.0), 0.0, 0.0, 0.0));
+}
