@@ -50,6 +50,7 @@ pub const FILES: &[(&str, &str)] = &[
     ("methods/pvmf/mask.wgsl", include_str!("methods/pvmf/mask.wgsl")),
     ("methods/pvmf/estimate.wgsl", include_str!("methods/pvmf/estimate.wgsl")),
     ("methods/pvmf/blur.wgsl", include_str!("methods/pvmf/blur.wgsl")),
+    ("methods/wedges/visibility.wgsl", include_str!("methods/wedges/visibility.wgsl")),
 ];
 
 const IMPORT: &str = "#import ";
@@ -167,7 +168,7 @@ macro_rules! gpu_struct {
 
 /// Every Rust struct a pass uploads for a shader, with its WGSL twin.
 pub fn gpu_structs() -> Vec<GpuStruct> {
-    use crate::methods::{pcf, pcss, pvm, pvmf, reference};
+    use crate::methods::{pcf, pcss, pvm, pvmf, reference, wedges};
     use crate::passes::{gbuffer, shading, shadow_map, shadow_test};
     vec![
         gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
@@ -181,6 +182,8 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
         gpu_struct!(pvm::EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" { h0, h1 }),
         gpu_struct!(pvmf::SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags }),
         gpu_struct!(pvmf::BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),
+        gpu_struct!(wedges::WedgeGpu => "Wedge" in "methods/wedges/visibility.wgsl" { a, b, dir, front, back, hard, left, right, u_left, u_right }),
+        gpu_struct!(wedges::WedgeSettingsUniform => "WedgeSettings" in "methods/wedges/visibility.wgsl" { tiles }),
     ]
 }
 

@@ -20,6 +20,7 @@ pub mod pcss;
 pub mod pvm;
 pub mod pvmf;
 pub mod reference;
+pub mod wedges;
 
 pub use params::{ParamKind, ParamSet, ParamSpec, ParamValue};
 
@@ -118,6 +119,7 @@ pub static REGISTRY: &[Registered] = &[
     entry::<reference::ReferenceShadows>(),
     entry::<pvm::PenumbraVolumeMaps>(),
     entry::<pvmf::PenumbraVolumeMaskFiltering>(),
+    entry::<wedges::PenumbraWedges>(),
 ];
 
 /// Every method name SPEC section 4 defines, in its order.
@@ -210,7 +212,7 @@ mod tests {
     fn unknown_and_planned_methods_are_named() {
         let e = MethodConfig::parse("magic", &BTreeMap::new()).unwrap_err().to_string();
         assert!(e.starts_with("unknown method 'magic'; available: hard"), "{e}");
-        let e = MethodConfig::parse("wedges", &BTreeMap::new()).unwrap_err().to_string();
-        assert!(e.contains("'wedges' is not implemented"), "{e}");
+        let e = MethodConfig::parse("raytraced", &BTreeMap::new()).unwrap_err().to_string();
+        assert!(e.contains("'raytraced' is not implemented"), "{e}");
     }
 }
