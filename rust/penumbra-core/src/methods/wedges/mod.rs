@@ -56,6 +56,24 @@ pub struct WedgesParams {
     pub falloff: bool,
     pub open_edges: OpenEdges,
     pub repairs: Repairs,
+    /// Where the hard shadow map is read for a pixel inside wedges (`HardTerm`).
+    pub hard_term: HardTerm,
+}
+
+/// Where the shadow map is read for a pixel inside wedges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HardTerm {
+    /// At the pixel (moved a few texels off a quad plane it nearly lies
+    /// on, to h's side); each wedge adds s - h.
+    AtPoint,
+    /// On the lit side of every holding wedge's quad; each wedge adds s - 1.
+    /// The map then counts only the other casters' shadows, which the
+    /// wedges' intensities join by the paper's sum (its shadow-volume count).
+    LitSide,
+}
+
+impl HardTerm {
+    pub const NAMES: [&'static str; 2] = ["at_point", "lit_side"];
 }
 
 /// The visibility pass's settings (`WedgeSettings` in visibility.wgsl).
@@ -95,6 +113,12 @@ impl Method for PenumbraWedges {
                 64,
                 "extra wedges at acute silhouette vertices (4.1, Figure 7), per 120 degrees of turn (0: one wedge per edge, the base algorithm)",
             ),
+            ParamSpec::choice(
+                "hard_term",
+                "at_point",
+                &HardTerm::NAMES,
+                "where the hard shadow map is read inside wedges: at the pixel (each wedge adds s - h), or on the lit side of every holding wedge's quad (each adds s - 1: overlapping casters summed as the paper's count)",
+            ),
             ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
             ParamSpec::choice(
                 "open_edges",
@@ -124,6 +148,7 @@ impl Method for PenumbraWedges {
             falloff: p.bool("falloff"),
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs,
+            hard_term: if p.choice("hard_term") == "lit_side" { HardTerm::LitSide } else { HardTerm::AtPoint },
         })
     }
 
@@ -174,7 +199,7 @@ impl Method for PenumbraWedges {
         let intensity = frame.ctx.screen_texture("wedges::intensity");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
             let counter = ctx.counters("wedges::pixels_in_wedge", 1, encoder);
-            let flags = u32::from(params.falloff) | (u32::from(params.repairs.horizon) << 1);
+            let flags = u32::from(params.falloff) | (u32::from(params.repairs.horizon) << 1) | (u32::from(params.hard_term == HardTerm::LitSide) << 2);
             let test = ctx.parameters("wedges::shadow_test", &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0));
             let settings = ctx.parameters("wedges::settings", &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count] });
             let resources = [

@@ -27,7 +27,7 @@ struct Wedge {
 
 struct WedgeSettings {
     // x: tile size in pixels; y: tiles per row; z: flags (bit 0: falloff,
-    // bit 1: repair "horizon"); w: wedge count.
+    // bit 1: repair "horizon", bit 2: hard_term "lit_side"); w: wedge count.
     tiles: vec4<u32>,
 };
 
@@ -89,9 +89,14 @@ fn wedge_term(w: Wedge, p: vec3<f32>) -> vec2<f32> {
         // Parker et al.'s sinusoidal attenuation, s' = 3s^2 - 2s^3 (4.2).
         s = s * s * (3.0 - 2.0 * s);
     }
-    let h = select(0.0, 1.0, dot(w.hard.xyz, pa) > 0.0);
+    // h: the quad's step, or 1 where the map is read on every quad's lit side.
+    let h = select(0.0, 1.0, dot(w.hard.xyz, pa) > 0.0 || (settings.tiles.z & 4u) != 0u);
     return vec2<f32>(s - h, 1.0);
 }
+
+// Texels (besides the normal offset) a pixel near a wedge's quad plane is
+// moved off it for the shadow-map read (see main).
+const CONSISTENCY_TEXELS: f32 = 2.0;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -114,21 +119,47 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             k_h = horizon_fraction(wedge_test, p, n);
         }
         if (cos_theta > 0.0) {
-            let q = biased_receiver(wedge_test, p, n, cos_theta);
-            hard = select(0.0, 1.0, q.w <= map_depth(wedge_test, shadow_map, q.xyz));
-            intensity = hard;
+            // The shadow map and a wedge's quad plane draw the same hard
+            // boundary only to within a texel or two (rasterisation and
+            // bias). Where p lies that close to the quad plane of a wedge
+            // holding it, the map is read at p moved, in its tangent plane,
+            // to CONSISTENCY_TEXELS off that plane on the side h(p) gives,
+            // so that the map's count and the wedge's step agree (otherwise
+            // a lone pixel gets 1 + s or s - 1).
+            let texel = light_texel_size(wedge_test.light_space, light_view_depth(wedge_test.light_space, p));
+            let margin = (CONSISTENCY_TEXELS + wedge_test.bias.x) * texel;
+            var push = vec3<f32>(0.0);
+            var terms = 0.0;
             let tile = vec2<u32>(px) / settings.tiles.x;
             let t = tile.y * settings.tiles.y + tile.x;
             let start = tile_offsets[t];
             let end = tile_offsets[t + 1u];
             var inside = false;
             for (var i = start; i < end; i = i + 1u) {
-                let term = wedge_term(wedges[tile_wedges[i]], p);
+                let w = wedges[tile_wedges[i]];
+                let term = wedge_term(w, p);
                 if (term.y > 0.0) {
-                    intensity = intensity + term.x;
+                    terms = terms + term.x;
                     inside = true;
+                    let d = dot(w.hard.xyz, p - w.a.xyz);
+                    // The side the map is read on: h(p)'s, or always the lit one.
+                    let lit = d > 0.0 || (settings.tiles.z & 4u) != 0u;
+                    if (abs(d) < margin || (lit && d < margin)) {
+                        let along = w.hard.xyz - n * dot(w.hard.xyz, n);
+                        // How fast moving along `along` leaves the plane;
+                        // a quad plane nearly parallel to the receiver is
+                        // left alone (the move would be long).
+                        let rate = dot(along, w.hard.xyz);
+                        if (rate > 0.05) {
+                            push = push + along * ((select(-margin, margin, lit) - d) / rate);
+                        }
+                    }
                 }
             }
+            // p + push lies in p's tangent plane: its biased depth is the receiver's there.
+            let q = biased_receiver(wedge_test, p + push, n, cos_theta);
+            hard = select(0.0, 1.0, q.w <= map_depth(wedge_test, shadow_map, q.xyz));
+            intensity = hard + terms;
             if (inside) {
                 atomicAdd(&pixels_in_wedge, 1u);
             }
