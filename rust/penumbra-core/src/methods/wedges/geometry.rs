@@ -507,3 +507,162 @@ pub fn bin_wedges(wedges: &[WedgeGpu], view_proj: DMat4, size: (u32, u32), lo: D
     }
     Bins { tiles_x, tiles_y, offsets, indices, culled }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn edge(a: DVec3, b: DVec3, ia: u32, ib: u32) -> SilhouetteEdge {
+        SilhouetteEdge { a, b, ia, ib }
+    }
+
+    /// The outline of a convex polygon at height y, seen from above, oriented
+    /// as the silhouette code does: normals (b - a) x (a - l) away from the polygon.
+    fn polygon(points: &[(f64, f64)], y: f64, l: DVec3) -> Vec<SilhouetteEdge> {
+        let n = points.len();
+        let mut out: Vec<SilhouetteEdge> = (0..n)
+            .map(|i| {
+                let (p, q) = (points[i], points[(i + 1) % n]);
+                edge(DVec3::new(p.0, y, p.1), DVec3::new(q.0, y, q.1), i as u32, ((i + 1) % n) as u32)
+            })
+            .collect();
+        let centroid = out.iter().map(|e| e.a).sum::<DVec3>() / n as f64;
+        if (out[0].b - out[0].a).cross(out[0].a - l).dot(centroid - out[0].a) > 0.0 {
+            out = out.iter().map(|e| edge(e.b, e.a, e.ib, e.ia)).collect();
+        }
+        out
+    }
+
+    #[test]
+    fn adjacent_wedges_share_their_side_plane_and_the_intensity_is_continuous_across_it() {
+        let l = DVec3::new(0.2, 5.0, 0.1);
+        let edges = polygon(&[(-1.0, -1.0), (1.0, -1.2), (1.3, 0.9), (-0.8, 1.1)], 2.0, l);
+        // The paper's construction: continuous (4.2). With repair "cone"
+        // the corners' shared lines leave the front and back planes, and
+        // the two wedges' side intensities part a little (measured 0.007).
+        for (cone, tolerance) in [(false, 1e-4), (true, 0.02)] {
+            continuity(&edges, l, cone, tolerance);
+        }
+    }
+
+    fn continuity(edges: &[SilhouetteEdge], l: DVec3, cone: bool, tolerance: f64) {
+        let w = penumbra_wedges(edges, l, 0.6, 0, cone);
+        assert_eq!(w.wedges.len(), 4);
+        assert_eq!(w.stats.junction_vertices, 0);
+        let v = |x: [f32; 4]| DVec3::new(f64::from(x[0]), f64::from(x[1]), f64::from(x[2]));
+        for (i, a) in w.wedges.iter().enumerate() {
+            // The wedge that starts where this one ends.
+            let b = w.wedges.iter().find(|b| b.a == a.b).unwrap_or_else(|| panic!("wedge {i} has a successor"));
+            assert!((v(a.right) + v(b.left)).length() < 1e-6, "one plane, opposite inward normals");
+            // Points on the shared plane inside both wedges get one intensity.
+            let vertex = v(a.b);
+            let (u, n) = (v(a.u_right), v(b.left));
+            let down = (vertex - l).normalize();
+            let mut checked = 0;
+            for t in [0.5, 1.0, 2.0] {
+                for s in [-0.3, -0.1, 0.0, 0.1, 0.3] {
+                    let mut p = vertex + down * t + u * (s * t);
+                    p -= n * n.dot(p - vertex);
+                    // A hair to each side of the plane, inside each wedge.
+                    if let (Some(x), Some(y)) = (wedge_intensity(a, p - n * 1e-7), wedge_intensity(b, p + n * 1e-7)) {
+                        assert!((x - y).abs() < tolerance, "{x} {y} at {p}");
+                        checked += 1;
+                    }
+                }
+            }
+            assert!(checked >= 3, "{checked}");
+        }
+    }
+
+    #[test]
+    fn the_intensity_runs_from_one_on_the_front_plane_to_zero_on_the_back_plane() {
+        let l = DVec3::new(0.0, 6.0, 0.0);
+        let edges = polygon(&[(-4.0, -1.5), (4.0, -1.5), (4.0, 1.5), (-4.0, 1.5)], 2.0, l);
+        let w = penumbra_wedges(&edges, l, 0.8, 0, true);
+        // The +z edge's wedge, over its middle on the ground (y = 0).
+        let wedge = w.wedges.iter().find(|w| w.a[2] == 1.5 && w.b[2] == 1.5).expect("the +z edge");
+        let mut last = f64::INFINITY;
+        let mut values = Vec::new();
+        for i in 0..=200 {
+            let p = DVec3::new(0.0, 0.0, 1.0 + 4.0 * f64::from(i) / 200.0);
+            if let Some(s) = wedge_intensity(wedge, p) {
+                assert!((0.0..=1.0).contains(&s));
+                // Away from the caster, more of the light: s grows with z.
+                assert!(last == f64::INFINITY || s >= last - 1e-9, "{last} {s}");
+                last = s;
+                values.push(s);
+            }
+        }
+        assert!(values.len() > 20 && values[0] < 0.03 && *values.last().unwrap() > 0.97, "{values:?}");
+        // Near half way on the hard-shadow plane (z = 1.5 * 6 / 4 = 2.25 on
+        // the ground): not exactly, as the side rays are perpendicular to
+        // the light ray through the edge's end, not to the one through p
+        // (measured 0.550 here, 8 units from the ends).
+        let mid = wedge_intensity(wedge, DVec3::new(0.0, 0.0, 2.25)).unwrap();
+        assert!((mid - 0.5).abs() < 0.06, "{mid}");
+    }
+
+    #[test]
+    fn acute_vertices_get_extra_wedges_and_right_angles_none() {
+        let l = DVec3::new(0.0, 6.0, 0.0);
+        // A thin triangle: two tips of about 20 degrees, one of 140.
+        let spike = polygon(&[(-2.0, 0.0), (2.0, -0.35), (2.0, 0.35)], 2.0, l);
+        let none = penumbra_wedges(&spike, l, 0.5, 0, true);
+        let some = penumbra_wedges(&spike, l, 0.5, 6, true);
+        assert_eq!(none.stats.extra_wedges, 0);
+        // ceil(6 * turn / 120 deg) at each of the two acute tips: turns near 160 and 100 degrees.
+        assert!(some.stats.extra_wedges >= 2 * 6, "{:?}", some.stats);
+        assert_eq!(some.wedges.len(), 3 + some.stats.extra_wedges);
+        let square = polygon(&[(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)], 2.0, l);
+        assert_eq!(penumbra_wedges(&square, l, 0.5, 6, true).stats.extra_wedges, 0);
+    }
+
+    #[test]
+    fn degenerate_edges_make_finite_wedges() {
+        let l = DVec3::new(0.0, 6.0, 0.0);
+        let edges = vec![
+            // Collinear run.
+            edge(DVec3::new(-1.0, 2.0, 1.0), DVec3::new(0.0, 2.0, 1.0), 0, 1),
+            edge(DVec3::new(0.0, 2.0, 1.0), DVec3::new(1.0, 2.0, 1.0), 1, 2),
+            // Pointing at the light.
+            edge(DVec3::new(0.0, 1.0, 0.0), DVec3::new(0.0, 2.0, 0.0), 3, 4),
+            // Turning straight back.
+            edge(DVec3::new(1.0, 2.0, 1.0), DVec3::new(0.0, 2.0, 1.0), 2, 5),
+        ];
+        for r in [1e-9, 0.5, 3.0] {
+            let w = penumbra_wedges(&edges, l, r, 8, true);
+            assert_eq!(w.stats.light_parallel_edges, 1);
+            for x in &w.wedges {
+                let all = [x.a, x.b, x.dir, x.front, x.back, x.hard, x.left, x.right, x.u_left, x.u_right];
+                assert!(all.iter().flatten().all(|c| c.is_finite()), "{x:?}");
+                for p in [DVec3::new(0.0, 0.0, 1.5), DVec3::new(0.5, 0.0, 1.2), DVec3::new(-0.7, 1.0, 1.1)] {
+                    if let Some(s) = wedge_intensity(x, p) {
+                        assert!((0.0..=1.0).contains(&s), "{s}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bins_cover_the_wedges_footprint_and_cull_what_leaves_the_box() {
+        let l = DVec3::new(0.0, 6.0, 0.0);
+        let edges = polygon(&[(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)], 2.0, l);
+        let w = penumbra_wedges(&edges, l, 0.5, 0, true);
+        let camera = crate::scene::Camera { eye: [0.0, 8.0, 0.01], target: [0.0; 3], up: [0.0, 1.0, 0.0], fov_y_degrees: 60.0, width: 64, height: 64 };
+        let (p, _, _) = camera.projection(glam::Vec3::new(-5.0, -0.1, -5.0), glam::Vec3::new(5.0, 2.5, 5.0));
+        let view_proj = DMat4::from_cols_array(&(p * camera.view()).to_cols_array().map(f64::from));
+        let bins = bin_wedges(&w.wedges, view_proj, (64, 64), DVec3::new(-5.0, -0.1, -5.0), DVec3::new(5.0, 2.5, 5.0));
+        assert_eq!((bins.tiles_x, bins.tiles_y, bins.culled), (4, 4, 0));
+        assert_eq!(bins.offsets.len(), 17);
+        assert_eq!(*bins.offsets.last().unwrap() as usize, bins.indices.len());
+        // Every wedge is binned somewhere; none in every tile (they are narrow).
+        for i in 0..4u32 {
+            let n = bins.indices.iter().filter(|&&x| x == i).count();
+            assert!(n > 0 && n < 16, "{i}: {n}");
+        }
+        // A box that ends above the wedges culls them all.
+        let culled = bin_wedges(&w.wedges, view_proj, (64, 64), DVec3::new(-5.0, 3.0, -5.0), DVec3::new(5.0, 4.0, 5.0));
+        assert_eq!(culled.culled, 4);
+    }
+}

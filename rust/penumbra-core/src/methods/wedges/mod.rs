@@ -41,8 +41,9 @@ use crate::silhouettes::{OpenEdges, Repairs, SceneSilhouette};
 pub mod geometry;
 pub use geometry::{bin_wedges, penumbra_wedges, wedge_intensity, Bins, WedgeGpu, WedgeStats, Wedges, TILE};
 
-/// The values of `repairs`, cumulative; "all" adds the horizon to the last.
-pub const REPAIR_LEVELS: [&str; 4] = ["all", "none", "cone", "cone+hidden"];
+/// The values of `repairs`, cumulative in the order docs/methods/wedges.md
+/// measures them; "all" adds the horizon to the last.
+pub const REPAIR_LEVELS: [&str; 4] = ["all", "none", "hidden", "cone+hidden"];
 
 /// The wedges and their screen bins (pass 2), as the pass cache keeps them.
 pub const PENUMBRA_WEDGES: CachedPass = CachedPass { name: "penumbra_wedges", capacity: 1 };
@@ -130,7 +131,7 @@ impl Method for PenumbraWedges {
                 "repairs",
                 "all",
                 &REPAIR_LEVELS,
-                "departures from the paper for real meshes, cumulative: none, cone (shared side lines kept in the vertex's light cone), cone+hidden (no wedge for edges hidden from the light centre), all (+horizon)",
+                "departures from the paper for real meshes, cumulative: none, hidden (no wedge for silhouette edges hidden from the light centre), cone+hidden (shared side lines kept in their vertex's light cone), all (+ the light below the receiver's horizon hidden)",
             ),
         ]);
         specs
