@@ -24,6 +24,7 @@
 
 use std::sync::Arc;
 
+use bytemuck::Zeroable;
 use glam::DMat4;
 
 use crate::error::Result;
@@ -282,5 +283,3 @@ impl PenumbraWedges {
         })?
     }
 }
-
-use bytemuck::Zeroable;
