@@ -26,8 +26,8 @@ import subprocess
 import sys
 import time
 
-METHODS = ["hard", "pcf", "pcss", "reference", "pvm", "pvmf"]
-PARAMS: dict[str, dict] = {"reference": {"n_samples": 16}, "pvm": {}, "pvmf": {}}
+METHODS = ["hard", "pcf", "pcss", "reference", "pvm", "pvmf", "raytraced", "adaptive", "wedges", "backprojection"]
+PARAMS: dict[str, dict] = {"reference": {"n_samples": 16}, "raytraced": {"n_samples": 16}}
 
 
 def worker(sizes: list[int], repeats: int) -> dict[str, float]:
@@ -38,6 +38,8 @@ def worker(sizes: list[int], repeats: int) -> dict[str, float]:
     for size in sizes:
         scene = penumbra.scenes.get("sphere_on_plane", width=size, height=size)
         for method in METHODS:
+            if method not in penumbra.methods():
+                continue  # a build from before the method
             params = PARAMS.get(method, {})
             renderer.render(scene, method, **params)
             times = []
@@ -46,6 +48,16 @@ def worker(sizes: list[int], repeats: int) -> dict[str, float]:
                 renderer.render(scene, method, **params)
                 times.append(time.perf_counter() - t)
             out[f"{method} {size}px ms"] = 1e3 * statistics.median(times)
+            if "map_size" in penumbra.method_info(method).defaults() and penumbra.method_info(method).param("map_size").choices:
+                # A build with map_size="auto" (issue 24): the same, sized to the image.
+                auto = {**params, "map_size": "auto"}
+                renderer.render(scene, method, **auto)
+                times = []
+                for _ in range(repeats):
+                    t = time.perf_counter()
+                    renderer.render(scene, method, **auto)
+                    times.append(time.perf_counter() - t)
+                out[f"{method} map_size=auto {size}px ms"] = 1e3 * statistics.median(times)
     cached = penumbra.Renderer(timing="cpu")
     scene = penumbra.scenes.get("sphere_on_plane", width=64, height=64)
     sweep = [("pvmf", {"n_blur": n}) for n in range(0, 24, 2)]
@@ -83,9 +95,12 @@ def main() -> int:
         print(f"round {r + 1}/{args.rounds} done", file=sys.stderr)
     print(f"| figure | A ({args.a}) | B ({args.b}) | B/A (median of {args.rounds} rounds) |")
     print("|---|---|---|---|")
-    for key in runs["A"][0]:
-        a = [run[key] for run in runs["A"]]
+    for key in runs["B"][0]:
         b = [run[key] for run in runs["B"]]
+        if key not in runs["A"][0]:
+            print(f"| {key} | (not in A) | {statistics.median(b):.2f} | |")
+            continue
+        a = [run[key] for run in runs["A"]]
         ratio = statistics.median(y / x for x, y in zip(a, b))
         print(f"| {key} | {statistics.median(a):.2f} | {statistics.median(b):.2f} | {ratio:.2f} |")
     return 0

@@ -157,3 +157,25 @@ def test_write_png_exr_npy(renderer: penumbra.Renderer, tmp_path: Path) -> None:
     np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), result.radiance)
     result.save(tmp_path / "v.png", image="visibility")
     assert (tmp_path / "v.png").stat().st_size > 0
+
+
+def test_outputs_read_back_only_what_is_asked(renderer: penumbra.Renderer) -> None:
+    """`outputs=` reads back the images named (and shades only for radiance),
+    with the same pixels as a full render."""
+    scene = penumbra.scenes.get(width=32, height=32)
+    full = renderer.render(scene, "pcss", map_size=256)
+    assert sorted(full.images) == sorted(penumbra.render.IMAGES)
+    only = renderer.render(scene, "pcss", map_size=256, outputs=["visibility"])
+    assert list(only.images) == ["visibility"] and "shading" not in only.timings and "geometry_pixels" not in only.stats
+    np.testing.assert_array_equal(only.visibility, full.visibility)
+    some = renderer.render(scene, "pcss", map_size=256, outputs=("object_id", "depth", "radiance"))
+    assert sorted(some.images) == ["depth", "object_id", "radiance"] and some.stats["geometry_pixels"] == full.stats["geometry_pixels"]
+    for name in some.images:
+        np.testing.assert_array_equal(some.images[name], full.images[name])
+    assert renderer.render(scene, "pcss", map_size=256, outputs=[]).images == {}
+    with pytest.raises(penumbra.ParameterError, match="no image 'visibility'"):
+        some.visibility
+    with pytest.raises(penumbra.ParameterError, match="unknown output 'albedo'"):
+        renderer.render(scene, "pcss", outputs=["albedo"])
+    with pytest.raises(penumbra.ParameterError, match="list of image names"):
+        renderer.render(scene, "pcss", outputs="visibility")

@@ -48,6 +48,7 @@ from penumbra._core import __version__
 from penumbra.errors import (
     CameraError,
     GpuError,
+    GpuFeatureError,
     GpuUnavailableError,
     GroundTruthError,
     InvalidInputError,
@@ -90,6 +91,7 @@ __all__ = [
     "ParameterError",
     "GpuUnavailableError",
     "GpuError",
+    "GpuFeatureError",
     "PenumbraIOError",
     "GroundTruthError",
 ]

@@ -5,8 +5,9 @@ Every function here raises the classes of :mod:`penumbra.errors`:
 ``MeshError``, ``LightError``, ``CameraError``, ``SceneError`` and
 ``ParameterError`` (all ``InvalidInputError``, hence ``ValueError``) for bad
 input, conversion errors included (never a bare ``TypeError``);
-``GpuUnavailableError`` when no adapter exists; ``GpuError`` when the GPU
-fails; ``PenumbraIOError`` when a file cannot be written; ``InternalError``
+``GpuUnavailableError`` when no adapter exists; ``GpuFeatureError`` (a
+``GpuUnavailableError``) when the adapter lacks a feature the method needs
+(ray queries for ``raytraced``); ``GpuError`` when the GPU fails; ``PenumbraIOError`` when a file cannot be written; ``InternalError``
 for a broken invariant of the core (a bug).
 
 Scenes and cameras cross as the typed values of :mod:`penumbra.scene`
@@ -22,6 +23,7 @@ import numpy.typing as npt
 
 from penumbra.errors import CameraError as CameraError
 from penumbra.errors import GpuError as GpuError
+from penumbra.errors import GpuFeatureError as GpuFeatureError
 from penumbra.errors import GpuUnavailableError as GpuUnavailableError
 from penumbra.errors import InternalError as InternalError
 from penumbra.errors import LightError as LightError
@@ -45,6 +47,7 @@ __all__ = [
     "ParameterError",
     "GpuUnavailableError",
     "GpuError",
+    "GpuFeatureError",
     "PenumbraIOError",
     "InternalError",
 ]
@@ -75,4 +78,5 @@ class Renderer:
         method: str,
         params: dict[str, Any],
         intermediates: bool | None = None,
+        outputs: list[str] | None = None,
     ) -> dict[str, Any]: ...

@@ -91,12 +91,13 @@ def _compare(args: argparse.Namespace) -> int:
     params = dict(_param(p) for p in args.param)
     c = compare_methods(
         scene, args.method, params=params, spp=args.spp, repeats=args.repeats,
-        cache_dir=args.cache_dir, out=args.output, progress=None if args.quiet else _progress,
+        cache_dir=args.cache_dir, out=args.output, progress=None if args.quiet else _progress, truth=args.truth,
     )
     gt = c.ground_truth
     seconds = sum(gt.seconds.values()) + (sum(gt.second.seconds.values()) if gt.second else 0.0)
     print(f"scene {scene.name}, {_size(scene)}; adapter {_adapter(c.adapter)}")
-    print(f"ground truth: Mitsuba {gt.variant}, {gt.spp} spp, noise from a second seed; {seconds:.1f} s"
+    truth = "raytraced (the engine's own)" if gt.variant == "raytraced" else f"Mitsuba {gt.variant}"
+    print(f"ground truth: {truth}, {gt.spp} spp, noise from a second seed; {seconds:.1f} s"
           f"{' (cached)' if all(gt.cached.values()) else ''}")
     print(f"times: {c.clock}; hard {c.baseline.warm_ms:.1f} ms")
     print(f"parameters: {json.dumps(params) if params else 'each method defaults'}")
@@ -143,6 +144,10 @@ def build_parser() -> argparse.ArgumentParser:
     _scene_arguments(comp, "256")
     comp.add_argument("--method", action="append", help="a method to compare, repeatable (default: every implemented method)")
     comp.add_argument("--spp", type=int, default=1024, help="ground-truth samples per pixel (default 1024)")
+    comp.add_argument(
+        "--truth", choices=["mitsuba", "raytraced"], default="mitsuba",
+        help="the ground truth: Mitsuba (default) or the engine's raytraced method at --spp light samples (give it thousands)",
+    )
     comp.add_argument("--repeats", type=int, default=DEFAULT_REPEATS,
                       help=f"timed renders per method after a warm-up, fewer once they add up to {DEFAULT_BUDGET_S:g} s; times are their median (default {DEFAULT_REPEATS})")
     comp.add_argument("--cache-dir", help="ground-truth cache folder (default $PENUMBRA_CACHE_DIR or ~/.cache/penumbra)")
@@ -163,7 +168,7 @@ def build_parser() -> argparse.ArgumentParser:
     listing.add_argument("--params", action="store_true", help="each method's paper and parameters")
     listing.add_argument("--markdown", action="store_true", help="the parameter tables of docs/parameters.md")
     listing.set_defaults(run=_methods)
-    sub.add_parser("info", help="show the GPU adapter in use").set_defaults(run=lambda a: print(json.dumps(adapter_info(), indent=2)) or 0)
+    sub.add_parser("info", help="show the GPU adapter in use (and whether it has ray queries, for raytraced)").set_defaults(run=lambda a: print(json.dumps(adapter_info(), indent=2)) or 0)
     return parser
 
 

@@ -1,6 +1,7 @@
-"""Render methods and Mitsuba ground truth of the same scene, measure, time,
-and draw them: ``penumbra.compare(...)`` (one method, side by side),
-:func:`compare_methods` and ``penumbra compare`` (every method, one picture).
+"""Render methods and ground truth of the same scene (Mitsuba, or the
+engine's ``raytraced`` at a high sample count), measure, time, and draw them:
+``penumbra.compare(...)`` (one method, side by side), :func:`compare_methods`
+and ``penumbra compare`` (every method, one picture).
 
 Times are warm: one untimed warm-up render, then the median of ``repeats``
 timed renders, each the wall clock of the whole render call (scene upload,
@@ -141,6 +142,22 @@ class Comparison:
         comparison_figure(self, path)
 
 
+def _truth(
+    truth: str, scene: Scene, camera: Camera | None, spp: int, seed: int, noise_seed: int | None,
+    cache_dir: str | os.PathLike[str] | None, renderer: Renderer,
+) -> GroundTruth:
+    """The ground truth ``truth`` names: ``"mitsuba"`` (cached under
+    ``cache_dir``) or ``"raytraced"`` (:func:`penumbra.truth.raytraced_truth`
+    at ``spp`` light samples, not cached)."""
+    from penumbra.truth import TRUTHS, raytraced_truth
+
+    if truth not in TRUTHS:
+        raise ParameterError(f"truth must be one of {list(TRUTHS)}, got {truth!r}")
+    if truth == "raytraced":
+        return raytraced_truth(scene, camera, n_samples=spp, seed=seed, noise_seed=noise_seed, renderer=renderer)
+    return ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
+
+
 def compare(
     scene: Scene,
     method: str = "hard",
@@ -153,18 +170,25 @@ def compare(
     cache_dir: str | os.PathLike[str] | None = None,
     out: str | os.PathLike[str] | None = None,
     repeats: int = DEFAULT_REPEATS,
+    truth: str = "mitsuba",
     **params: Any,
 ) -> Comparison:
-    """Renders ``scene`` with ``method`` (and its ``params``) and with Mitsuba
-    (radiance and visibility at ``spp``; with ``noise_seed`` a second ground
-    truth for the noise floor), computes every metric of :mod:`penumbra.metrics`,
-    times the method (:func:`timed_render`: a warm-up, then the median of
-    ``repeats``), and writes the side-by-side picture to ``out`` when given."""
+    """Renders ``scene`` with ``method`` (and its ``params``) and the ground
+    truth (radiance and visibility at ``spp`` samples per pixel; with
+    ``noise_seed`` a second ground truth for the noise floor), computes every
+    metric of :mod:`penumbra.metrics`, times the method (:func:`timed_render`:
+    a warm-up, then the median of ``repeats``), and writes the side-by-side
+    picture to ``out`` when given.
+
+    ``truth``: ``"mitsuba"`` (the independent default, cached under
+    ``cache_dir``) or ``"raytraced"``: the engine's own method ``raytraced`` at
+    ``spp`` light samples (:func:`penumbra.truth.raytraced_truth`; give it
+    thousands: 4096 for a noise floor near Mitsuba's at 1024), not cached."""
     if not isinstance(scene, Scene):
         raise SceneError(f"expected a penumbra.Scene, got {type(scene).__name__}")
     renderer = renderer or timing_renderer()
     result, timing = timed_render(renderer, scene, method, repeats=repeats, camera=camera, **params)
-    gt = ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
+    gt = _truth(truth, scene, camera, spp, seed, noise_seed, cache_dir, renderer)
     comparison = Comparison(result, gt, metrics_module.compare(result, gt), timing)
     if out is not None:
         comparison.save_figure(out)
@@ -336,6 +360,7 @@ def compare_methods(
     cache_dir: str | os.PathLike[str] | None = None,
     out: str | os.PathLike[str] | None = None,
     progress: Callable[[str], None] | None = None,
+    truth: str = "mitsuba",
 ) -> MethodComparison:
     """Every method in ``methods`` (default: every implemented one,
     ``reference`` last) against Mitsuba ground truth of ``scene``, each timed
@@ -411,8 +436,8 @@ def compare_methods(
     baseline = timings["hard"]
 
     started = time.perf_counter()
-    say(f"ground truth: Mitsuba, {spp} spp, two seeds (cached after the first run)")
-    gt = ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
+    say(f"ground truth: {truth}, {spp} spp, two seeds" + (" (cached after the first run)" if truth == "mitsuba" else ""))
+    gt = _truth(truth, scene, camera, spp, seed, noise_seed, cache_dir, renderer)
     cached = all(gt.cached.values()) and (gt.second is None or all(gt.second.cached.values()))
     say(f"ground truth: {gt.variant}, {'read from the cache' if cached else 'rendered'} in {time.perf_counter() - started:.1f} s")
     rows = [Comparison(result, gt, _with_cast_shadows(metrics_module.compare(result, gt), result, gt, scene), timing)

@@ -16,6 +16,7 @@ __all__ = [
     "SceneError",
     "ParameterError",
     "GpuUnavailableError",
+    "GpuFeatureError",
     "GpuError",
     "PenumbraIOError",
     "GroundTruthError",
@@ -56,6 +57,13 @@ class ParameterError(InvalidInputError):
 class GpuUnavailableError(PenumbraError, RuntimeError):
     """No GPU adapter (hardware or software) could be found or opened. The
     message names the driver package to install."""
+
+
+class GpuFeatureError(GpuUnavailableError):
+    """The adapter lacks a feature the method needs: ray queries
+    (``EXPERIMENTAL_RAY_QUERY``, Vulkan ``VK_KHR_ray_query``) for ``raytraced``.
+    The message names the feature and the adapter; ``penumbra info`` shows
+    whether ray queries are available (``ray_queries``)."""
 
 
 class GpuError(PenumbraError, RuntimeError):

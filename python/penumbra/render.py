@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -20,7 +21,9 @@ IMAGES = ("radiance", "visibility", "depth", "normal", "position", "object_id")
 
 def adapter_info() -> dict[str, Any]:
     """The GPU adapter a renderer would use: name, backend, device type,
-    driver, whether it has timestamp queries and whether it is software.
+    driver, whether it has timestamp queries, whether it has ray queries
+    (``ray_queries``: method ``raytraced`` needs them; false also when
+    ``PENUMBRA_DISABLE_RAY_QUERY`` is set) and whether it is software.
 
     Raises :class:`~penumbra.errors.GpuUnavailableError` when there is none."""
     return _core.adapter_info()
@@ -36,7 +39,8 @@ class Param:
     """One parameter of a method, as the method declares it in the core: its
     name, ``type`` (``"bool"``, ``"int"``, ``"float"`` or ``"choice"``),
     default, accepted values (``minimum``/``maximum`` or ``choices``) and
-    a line of documentation."""
+    a line of documentation. An ``"int"`` with ``choices`` (``("auto",)``:
+    ``map_size``) also takes those names."""
 
     name: str
     type: str
@@ -161,35 +165,40 @@ class RenderResult:
     total_ms: float
     stats: dict[str, int] = field(default_factory=dict)
 
+    def _image(self, name: str) -> np.ndarray:
+        if name not in self.images:
+            raise ParameterError(f"this result has no image {name!r}: it read back {sorted(self.images)} (see Renderer.render's outputs=)")
+        return self.images[name]
+
     @property
     def radiance(self) -> np.ndarray:
         """Linear radiance, float32 (H, W, 3)."""
-        return self.images["radiance"]
+        return self._image("radiance")
 
     @property
     def visibility(self) -> np.ndarray:
         """Visible fraction of the light in [0, 1], float32 (H, W); 0 on background."""
-        return self.images["visibility"]
+        return self._image("visibility")
 
     @property
     def depth(self) -> np.ndarray:
         """Distance along the camera axis, float32 (H, W); 0 on background."""
-        return self.images["depth"]
+        return self._image("depth")
 
     @property
     def normal(self) -> np.ndarray:
         """Unit shading normal, float32 (H, W, 3); 0 on background."""
-        return self.images["normal"]
+        return self._image("normal")
 
     @property
     def position(self) -> np.ndarray:
         """World position, float32 (H, W, 3); 0 on background."""
-        return self.images["position"]
+        return self._image("position")
 
     @property
     def object_id(self) -> np.ndarray:
         """Object id, int32 (H, W); -1 on background."""
-        return self.images["object_id"]
+        return self._image("object_id")
 
     @property
     def reused_passes(self) -> list[str]:
@@ -199,13 +208,26 @@ class RenderResult:
         return [k[len(prefix):] for k, v in self.stats.items() if k.startswith(prefix) and k != "reused_passes" and v]
 
     def __getitem__(self, name: str) -> np.ndarray:
-        return self.images[name]
+        return self._image(name)
 
     def save(self, path: str | os.PathLike[str], image: str = "radiance") -> None:
         """Writes one image (radiance by default) with :func:`write_image`."""
         if image not in self.images:
             raise ParameterError(f"no image named {image!r}; this result has {sorted(self.images)}")
         write_image(path, self.images[image])
+
+
+def _outputs(outputs: Iterable[str] | None) -> list[str] | None:
+    """The output names as a list for the core, checked here for type (the
+    core checks the names)."""
+    if outputs is None:
+        return None
+    if isinstance(outputs, (str, bytes)) or not isinstance(outputs, Iterable):
+        raise ParameterError(f"outputs must be a list of image names of {list(IMAGES)}, got {outputs!r}")
+    names = list(outputs)
+    if not all(isinstance(n, str) for n in names):
+        raise ParameterError(f"outputs must be a list of image names of {list(IMAGES)}, got {names!r}")
+    return names
 
 
 class Renderer:
@@ -275,13 +297,21 @@ class Renderer:
         *,
         camera: Camera | None = None,
         intermediates: bool = False,
+        outputs: Iterable[str] | None = None,
         **params: Any,
     ) -> RenderResult:
         """Renders ``scene`` with ``method`` and its parameters (keyword
-        arguments, named as in the papers; see SPEC section 4).
+        arguments, named as in the papers; see SPEC section 4, and
+        :func:`method_info` or docs/parameters.md for each method's).
 
         ``camera`` overrides the scene's own. ``intermediates=True`` also
-        returns the method's intermediate images (e.g. ``shadow_map``)."""
+        returns the method's intermediate images (e.g. ``shadow_map``).
+        ``outputs`` names the images to read back, of ``IMAGES``
+        (``radiance``, ``visibility``, ``depth``, ``position``, ``normal``,
+        ``object_id``; all by default): a render that needs visibility alone
+        reads back visibility alone, and skips shading unless ``radiance``
+        is asked for. ``stats["geometry_pixels"]`` is there when ``normal``
+        or ``object_id`` is."""
         if not isinstance(scene, Scene):
             raise SceneError(f"expected a penumbra.Scene, got {type(scene).__name__}")
         core_scene = scene._core_value()
@@ -293,6 +323,7 @@ class Renderer:
         if not isinstance(camera, Camera):
             raise CameraError(f"camera must be a penumbra.Camera, got {type(camera).__name__}")
         _check_wide_integers(method, params)
+        wanted = _outputs(outputs)
         # intermediates goes as is: the core refuses anything but a bool.
-        out = self._core.render(core_scene, camera._core_value(), method, params, intermediates)
+        out = self._core.render(core_scene, camera._core_value(), method, params, intermediates, wanted)
         return RenderResult(**out)

@@ -141,19 +141,38 @@ def _run_chunk(chunk: _Chunk, renderer: Renderer | None = None) -> list[tuple[di
     renderer = renderer or process_renderer()
     out = []
     for task in chunk.tasks:
-        result = renderer.render(chunk.scenes[task.scene_name], task.method, camera=chunk.camera, **task.params)
+        result = renderer.render(
+            chunk.scenes[task.scene_name], task.method, camera=chunk.camera, outputs=_outputs_needed(chunk, task), **task.params
+        )
         out.append(_row(task, result, chunk))
     return out
 
 
+def _outputs_needed(chunk: _Chunk, task: _Task) -> list[str]:
+    """The images a configuration's row needs: those kept, and what the
+    metrics read (visibility, object ids, and radiance where the ground
+    truth has it). Nothing else is read back, and shading runs only for
+    radiance."""
+    needed = set(chunk.keep_images)
+    gt = chunk.ground_truth.get(task.scene_name)
+    if gt is not None:
+        needed |= {"visibility", "object_id"} | ({"radiance"} if "radiance" in gt.images else set())
+    return [name for name in IMAGES if name in needed]
+
+
 def _ground_truths(
-    ground_truth: Any, scenes: dict[str, Scene], camera: Camera | None, spp: int
+    ground_truth: Any, scenes: dict[str, Scene], camera: Camera | None, spp: int, renderer: Renderer | None
 ) -> dict[str, GroundTruth]:
     from penumbra.mitsuba import GroundTruth, ground_truth as render_ground_truth
+    from penumbra.truth import raytraced_truth
 
     if ground_truth is None or ground_truth is False:
         return {}
-    if ground_truth is True:
+    if ground_truth == "raytraced":
+        # The engine's own truth, with a second seed for its noise floor.
+        target = renderer or process_renderer()
+        return {name: raytraced_truth(s, camera, n_samples=spp, noise_seed=1, renderer=target) for name, s in scenes.items()}
+    if ground_truth is True or ground_truth == "mitsuba":
         # With a second seed, as penumbra.compare: every metric gets its noise floor.
         return {name: render_ground_truth(s, camera, spp=spp, noise_seed=1) for name, s in scenes.items()}
     if isinstance(ground_truth, GroundTruth):
@@ -165,7 +184,9 @@ def _ground_truths(
         if missing:
             raise ParameterError(f"no ground truth for scene(s) {missing}")
         return {n: ground_truth[n] for n in scenes}
-    raise ParameterError(f"ground_truth must be None, True, a GroundTruth or a dict of them, got {type(ground_truth).__name__}")
+    raise ParameterError(
+        f"ground_truth must be None, True ('mitsuba'), 'raytraced', a GroundTruth or a dict of them, got {ground_truth!r}"
+    )
 
 
 def _progress_bar(total: int, progress: bool | None) -> Any:
@@ -182,7 +203,7 @@ def sweep(
     method: str | Sequence[str],
     params: ParamGrid = None,
     *,
-    ground_truth: bool | GroundTruth | Mapping[str, GroundTruth] | None = None,
+    ground_truth: bool | str | GroundTruth | Mapping[str, GroundTruth] | None = None,
     ground_truth_spp: int = 256,
     camera: Camera | None = None,
     renderer: Renderer | None = None,
@@ -199,9 +220,12 @@ def sweep(
     varying fastest), a list of dicts, or None (defaults). Configurations run
     scene by scene, then method by method, then through the grid in order.
 
-    ``ground_truth``: None; True to render Mitsuba ground truth of each scene
-    at ``ground_truth_spp``, with a second seed for the noise floor as
-    :func:`penumbra.compare` does (both cached under ``$PENUMBRA_CACHE_DIR``); a
+    ``ground_truth``: None; True (or ``"mitsuba"``) to render Mitsuba ground
+    truth of each scene at ``ground_truth_spp``, with a second seed for the
+    noise floor as :func:`penumbra.compare` does (both cached under
+    ``$PENUMBRA_CACHE_DIR``); ``"raytraced"`` for the engine's own truth, method
+    ``raytraced`` at ``ground_truth_spp`` light samples with a second seed
+    (:func:`penumbra.truth.raytraced_truth`, not cached; give it thousands); a
     :class:`~penumbra.mitsuba.GroundTruth` for a single scene; or a dict of
     scene name to one. With it, every row has every metric of
     :func:`penumbra.metrics.compare`.
@@ -239,7 +263,7 @@ def sweep(
     sets = grid(params)
     kept = _kept_images(keep_images)
     columns = tuple(dict.fromkeys(k for p in sets for k in p))
-    truths = _ground_truths(ground_truth, named, camera, ground_truth_spp)
+    truths = _ground_truths(ground_truth, named, camera, ground_truth_spp, renderer)
     tasks = [
         _Task(i, scene_name, m, p)
         for i, (scene_name, m, p) in enumerate(itertools.product(named, methods, sets))

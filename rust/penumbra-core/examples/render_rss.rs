@@ -64,7 +64,7 @@ fn main() {
             light: SphereLight { center: [0.0, 5.0, 0.0], radius: 0.2 + 0.001 * (i % 97) as f32, intensity: [10.0; 3] },
             ambient: [0.0; 3],
         };
-        renderer.render(&scene, &camera, &config, &RenderOptions { intermediates: false }).expect("render");
+        renderer.render(&scene, &camera, &config, &RenderOptions::default()).expect("render");
     };
     for i in 0..20 {
         one(i);

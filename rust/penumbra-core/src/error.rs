@@ -22,6 +22,10 @@ pub enum Error {
     /// No adapter could be found or a device could not be created.
     #[error("{0}")]
     GpuUnavailable(String),
+    /// The adapter lacks a feature a method needs (ray queries for `raytraced`);
+    /// the message names the feature, the adapter and how to get one that has it.
+    #[error("{0}")]
+    MissingFeature(String),
     /// The GPU reported an error while rendering (out of memory, validation, device lost).
     #[error("GPU error: {0}")]
     Gpu(String),

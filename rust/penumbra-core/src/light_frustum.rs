@@ -294,7 +294,7 @@ impl LightFrustum {
 /// four `planes` (Sutherland-Hodgman; each plane adds at most one corner, so
 /// seven hold the result); empty when nothing of it is left. A triangle that
 /// only touches a plane keeps the touching points.
-fn clip_to_cone(triangle: [DVec3; 3], planes: &[DVec3; 4]) -> Vec<DVec3> {
+pub(crate) fn clip_to_cone(triangle: [DVec3; 3], planes: &[DVec3; 4]) -> Vec<DVec3> {
     let mut polygon = [DVec3::ZERO; 8];
     polygon[..3].copy_from_slice(&triangle);
     let mut len = 3;

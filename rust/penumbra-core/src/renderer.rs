@@ -51,6 +51,43 @@ impl Image {
 pub struct RenderOptions {
     /// Also read back each method's intermediate images (shadow maps, masks).
     pub intermediates: bool,
+    /// Which images to read back (all by default).
+    pub outputs: Outputs,
+}
+
+/// The images a render can return (SPEC section 5), in order.
+pub const OUTPUTS: [&str; 6] = ["radiance", "visibility", "depth", "position", "normal", "object_id"];
+
+/// A set of [`OUTPUTS`]: a render reads back only these, and runs the shading
+/// pass only when `radiance` is among them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Outputs(u8);
+
+impl Default for Outputs {
+    fn default() -> Self {
+        Self::ALL
+    }
+}
+
+impl Outputs {
+    pub const ALL: Outputs = Outputs((1 << OUTPUTS.len()) - 1);
+    pub const NONE: Outputs = Outputs(0);
+
+    /// The set of the names given; an unknown name is an error naming the choices.
+    pub fn parse<'a>(names: impl IntoIterator<Item = &'a str>) -> Result<Self> {
+        let mut bits = 0;
+        for name in names {
+            let i = OUTPUTS.iter().position(|o| *o == name).ok_or_else(|| {
+                Error::InvalidParameter(format!("unknown output '{name}'; outputs are {}", OUTPUTS.join(", ")))
+            })?;
+            bits |= 1 << i;
+        }
+        Ok(Self(bits))
+    }
+
+    pub fn has(self, name: &str) -> bool {
+        OUTPUTS.iter().position(|o| *o == name).is_some_and(|i| self.0 & (1 << i) != 0)
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -234,14 +271,34 @@ impl Renderer {
             frame.pass(GBUFFER.name, |ctx, encoder, ts| self.gbuffer.record(ctx, encoder, view, projection, ts))?;
             frame.fresh(GBUFFER.name, gbuffer_key, gbuffer);
         }
+        // map_size="auto" (the default): the size from the image, for the
+        // projection the method's maps use.
+        let resolved;
+        let method = match method.auto_map_size() {
+            Some(mode) => {
+                let projection = frame.ctx.projection(mode)?;
+                let map_size = crate::map_size::auto_map_size(&projection, camera, prepared, frame.ctx.max_texture_side());
+                resolved = method.with_map_size(map_size)?;
+                frame.stat("map_size_auto", 1);
+                &resolved
+            }
+            None => method,
+        };
         let output = self.method(method.index()).record(&mut frame, method.typed())?;
-        let radiance = frame.ctx.texture(
-            "renderer::radiance",
-            size,
-            RADIANCE_FORMAT,
-            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-        );
-        frame.pass("shading", |ctx, encoder, ts| self.shading.record(ctx, encoder, &output.visibility, &radiance, ts))?;
+        // Shading only where radiance is asked for.
+        let outputs = options.outputs;
+        let radiance = if outputs.has("radiance") {
+            let radiance = frame.ctx.texture(
+                "renderer::radiance",
+                size,
+                RADIANCE_FORMAT,
+                wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+            );
+            frame.pass("shading", |ctx, encoder, ts| self.shading.record(ctx, encoder, &output.visibility, &radiance, ts))?;
+            Some(radiance)
+        } else {
+            None
+        };
         let gbuffer = frame.ctx.gbuffer.clone();
         let record = frame.into_record();
 
@@ -265,12 +322,23 @@ impl Renderer {
         let copy = |encoder: &mut wgpu::CommandEncoder, texture: &wgpu::Texture, aspect| {
             readback::copy_texture(device, &self.pool, encoder, texture, aspect)
         };
-        let mut pending: Vec<PendingReadback> = vec![
-            copy(&mut encoder, &radiance, all),
-            copy(&mut encoder, &output.visibility, all),
-            copy(&mut encoder, &gbuffer.position, all),
-            copy(&mut encoder, &gbuffer.normal, all),
-        ];
+        let (want_position, want_normal) = (
+            outputs.has("depth") || outputs.has("position"),
+            outputs.has("normal") || outputs.has("object_id"),
+        );
+        let mut pending: Vec<PendingReadback> = Vec::new();
+        if let Some(radiance) = &radiance {
+            pending.push(copy(&mut encoder, radiance, all));
+        }
+        if outputs.has("visibility") {
+            pending.push(copy(&mut encoder, &output.visibility, all));
+        }
+        if want_position {
+            pending.push(copy(&mut encoder, &gbuffer.position, all));
+        }
+        if want_normal {
+            pending.push(copy(&mut encoder, &gbuffer.normal, all));
+        }
         for (buffer, names) in &record.counters {
             pending.push(readback::copy_buffer(device, &self.pool, &mut encoder, buffer, 4 * names.len() as u32));
         }
@@ -299,36 +367,39 @@ impl Renderer {
         }
         let mut next = || readback::cast_vec::<f32>(bytes.next().unwrap_or_default());
         let (w, h) = (size.0 as usize, size.1 as usize);
-        let rgba = next();
-        let radiance: Vec<f32> = rgba.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]]).collect();
-        let visibility = next();
-        let position = next();
-        let normal = next();
-        let mut images = vec![
-            Image { name: "radiance".into(), shape: vec![h, w, 3], data: ImageData::F32(radiance) },
-            Image { name: "visibility".into(), shape: vec![h, w], data: ImageData::F32(visibility) },
-            Image {
-                name: "depth".into(),
-                shape: vec![h, w],
-                data: ImageData::F32(position.chunks_exact(4).map(|t| t[3]).collect()),
-            },
-            Image {
-                name: "position".into(),
-                shape: vec![h, w, 3],
-                data: ImageData::F32(position.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]]).collect()),
-            },
-            Image {
-                name: "normal".into(),
-                shape: vec![h, w, 3],
-                data: ImageData::F32(normal.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]]).collect()),
-            },
-        ];
-        let object_id: Vec<i32> = normal
-            .chunks_exact(4)
-            .map(|t| if t[3] < 0.0 { -1 } else { prepared.materials.get(t[3] as usize).map_or(-1, |m| m.1) })
-            .collect();
-        stats.insert("geometry_pixels".into(), object_id.iter().filter(|&&i| i >= 0).count() as i64);
-        images.push(Image { name: "object_id".into(), shape: vec![h, w], data: ImageData::I32(object_id) });
+        let mut images = Vec::new();
+        let rgb = |texels: &[f32]| texels.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]]).collect::<Vec<f32>>();
+        if radiance.is_some() {
+            images.push(Image { name: "radiance".into(), shape: vec![h, w, 3], data: ImageData::F32(rgb(&next())) });
+        }
+        if outputs.has("visibility") {
+            images.push(Image { name: "visibility".into(), shape: vec![h, w], data: ImageData::F32(next()) });
+        }
+        if want_position {
+            let position = next();
+            if outputs.has("depth") {
+                let depth = position.chunks_exact(4).map(|t| t[3]).collect();
+                images.push(Image { name: "depth".into(), shape: vec![h, w], data: ImageData::F32(depth) });
+            }
+            if outputs.has("position") {
+                images.push(Image { name: "position".into(), shape: vec![h, w, 3], data: ImageData::F32(rgb(&position)) });
+            }
+        }
+        if want_normal {
+            let normal = next();
+            if outputs.has("normal") {
+                images.push(Image { name: "normal".into(), shape: vec![h, w, 3], data: ImageData::F32(rgb(&normal)) });
+            }
+            let object_id: Vec<i32> = normal
+                .chunks_exact(4)
+                .map(|t| if t[3] < 0.0 { -1 } else { prepared.materials.get(t[3] as usize).map_or(-1, |m| m.1) })
+                .collect();
+            // Known where the G-buffer's normals are read back (`normal` or `object_id` asked for).
+            stats.insert("geometry_pixels".into(), object_id.iter().filter(|&&i| i >= 0).count() as i64);
+            if outputs.has("object_id") {
+                images.push(Image { name: "object_id".into(), shape: vec![h, w], data: ImageData::I32(object_id) });
+            }
+        }
         for (_, names) in &record.counters {
             let counts: Vec<u32> = readback::cast_vec(bytes.next().unwrap_or_default());
             for (i, name) in names.iter().enumerate() {

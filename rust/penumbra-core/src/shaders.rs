@@ -44,6 +44,7 @@ pub const FILES: &[(&str, &str)] = &[
     ("methods/pcf/visibility.wgsl", include_str!("methods/pcf/visibility.wgsl")),
     ("methods/pcss/visibility.wgsl", include_str!("methods/pcss/visibility.wgsl")),
     ("methods/reference/visibility.wgsl", include_str!("methods/reference/visibility.wgsl")),
+    ("methods/raytraced/visibility.wgsl", include_str!("methods/raytraced/visibility.wgsl")),
     ("methods/pvm/volumes.wgsl", include_str!("methods/pvm/volumes.wgsl")),
     ("methods/pvm/visibility.wgsl", include_str!("methods/pvm/visibility.wgsl")),
     ("methods/pvm/edge_maps.wgsl", include_str!("methods/pvm/edge_maps.wgsl")),
@@ -94,13 +95,27 @@ pub fn files_of(path: &str) -> Result<Vec<&'static str>, String> {
     Ok(out)
 }
 
-/// The composed source of `path`: its imports resolved.
+const ENABLE: &str = "enable ";
+
+/// The composed source of `path`: its imports resolved. WGSL wants its
+/// `enable` directives (`enable wgpu_ray_query;`) before any declaration:
+/// those of every file come first, each once, and are blanked where written.
 pub fn try_compose(path: &str) -> Result<String, String> {
+    let files = files_of(path)?;
     let mut out = String::new();
-    for file in files_of(path)? {
+    for file in &files {
+        for line in text(file)?.lines().filter(|l| l.trim().starts_with(ENABLE)) {
+            if !out.lines().any(|l| l == line.trim()) {
+                out.push_str(line.trim());
+                out.push('\n');
+            }
+        }
+    }
+    for file in files {
         out.push_str(&format!("// ---- {file}\n"));
         for line in text(file)?.lines() {
-            if !line.trim().starts_with(IMPORT) {
+            let trimmed = line.trim();
+            if !trimmed.starts_with(IMPORT) && !trimmed.starts_with(ENABLE) {
                 out.push_str(line);
             }
             out.push('\n');
@@ -168,7 +183,7 @@ macro_rules! gpu_struct {
 
 /// Every Rust struct a pass uploads for a shader, with its WGSL twin.
 pub fn gpu_structs() -> Vec<GpuStruct> {
-    use crate::methods::{pcf, pcss, pvm, pvmf, reference, wedges};
+    use crate::methods::{pcf, pcss, pvm, pvmf, raytraced, reference, wedges};
     use crate::passes::{gbuffer, shading, shadow_map, shadow_test};
     vec![
         gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
@@ -180,6 +195,8 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
         gpu_struct!(pcss::PcssUniform => "PcssSampling" in "methods/pcss/visibility.wgsl" { blocker_samples, filter_samples, seed, poisson }),
         gpu_struct!(reference::SampleWeightUniform => "SampleWeight" in "methods/reference/visibility.wgsl" { normal, light_center }),
         gpu_struct!(pvm::EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" { h0, h1 }),
+        gpu_struct!(raytraced::RaySettingsUniform => "RaySettings" in "methods/raytraced/visibility.wgsl" { light, offset, counts }),
+        gpu_struct!(raytraced::SampleUniform => "LightSample" in "methods/raytraced/visibility.wgsl" { position, normal }),
         gpu_struct!(pvmf::SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags }),
         gpu_struct!(pvmf::BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),
         gpu_struct!(wedges::WedgeGpu => "Wedge" in "methods/wedges/visibility.wgsl" { a, b, dir, front, back, hard, left, right, u_left, u_right }),

@@ -63,7 +63,7 @@ fn cube_casts_a_shadow_on_the_plane() {
         light: SphereLight { center: [0.0, 5.0, 0.0], radius: 0.0, intensity: [10.0; 3] },
         ambient: [0.0; 3],
     };
-    let result = r.render(&scene, &camera(64), &hard(), &RenderOptions { intermediates: true }).unwrap();
+    let result = r.render(&scene, &camera(64), &hard(), &RenderOptions { intermediates: true, ..Default::default() }).unwrap();
     let vis = result.image("visibility").unwrap().f32().unwrap();
     let ids = match &result.image("object_id").unwrap().data {
         penumbra_core::ImageData::I32(v) => v.clone(),

@@ -24,7 +24,13 @@ fn every_shader_validates_with_naga() {
     for (name, source, _) in penumbra_core::shaders::all() {
         let module = naga::front::wgsl::parse_str(&source)
             .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        // Ray queries only where the shader enables them (`raytraced`).
+        let capabilities = if source.lines().any(|l| l.trim() == "enable wgpu_ray_query;") {
+            naga::valid::Capabilities::RAY_QUERY
+        } else {
+            naga::valid::Capabilities::empty()
+        };
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
     }

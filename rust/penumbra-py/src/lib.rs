@@ -25,6 +25,7 @@ pyo3::import_exception!(penumbra.errors, SceneError);
 pyo3::import_exception!(penumbra.errors, ParameterError);
 pyo3::import_exception!(penumbra.errors, GpuUnavailableError);
 pyo3::import_exception!(penumbra.errors, GpuError);
+pyo3::import_exception!(penumbra.errors, GpuFeatureError);
 pyo3::import_exception!(penumbra.errors, PenumbraIOError);
 pyo3::import_exception!(penumbra.errors, InternalError);
 
@@ -38,6 +39,7 @@ fn to_py(e: core::Error) -> PyErr {
         core::Error::InvalidScene(_) => SceneError::new_err(message),
         core::Error::InvalidParameter(_) => ParameterError::new_err(message),
         core::Error::GpuUnavailable(_) => GpuUnavailableError::new_err(message),
+        core::Error::MissingFeature(_) => GpuFeatureError::new_err(message),
         core::Error::Gpu(_) => GpuError::new_err(message),
         core::Error::Io(_) => PenumbraIOError::new_err(message),
     }
@@ -235,6 +237,7 @@ fn summary_dict<'py>(py: Python<'py>, s: &core::AdapterSummary) -> PyResult<Boun
     d.set_item("driver", &s.driver)?;
     d.set_item("driver_info", &s.driver_info)?;
     d.set_item("timestamp_queries", s.timestamp_queries)?;
+    d.set_item("ray_queries", s.ray_queries)?;
     d.set_item("is_software", s.is_software)?;
     Ok(d)
 }
@@ -328,7 +331,8 @@ impl Renderer {
 
     /// Renders a `CoreScene` seen by a `CoreCamera`; returns a dict of
     /// images, timings and stats.
-    #[pyo3(signature = (scene, camera, method, params, intermediates = None))]
+    #[pyo3(signature = (scene, camera, method, params, intermediates = None, outputs = None))]
+    #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
         py: Python<'py>,
@@ -337,6 +341,7 @@ impl Renderer {
         method: &Bound<'py, PyAny>,
         params: &Bound<'py, PyAny>,
         intermediates: Option<&Bound<'py, PyAny>>,
+        outputs: Option<Vec<String>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let parameter_error: ErrorClass = ParameterError::new_err;
         let scene = self::scene(scene)?;
@@ -353,7 +358,11 @@ impl Renderer {
         }
         let config = core::MethodConfig::parse(&method, &parsed).map_err(to_py)?;
         let intermediates = intermediates.map(|i| strict_bool(i, "intermediates")).transpose()?.unwrap_or(false);
-        let options = core::RenderOptions { intermediates };
+        let outputs = match &outputs {
+            None => core::Outputs::ALL,
+            Some(names) => core::Outputs::parse(names.iter().map(String::as_str)).map_err(to_py)?,
+        };
+        let options = core::RenderOptions { intermediates, outputs };
         let inner = &self.inner;
         let result = py.detach(|| inner.render(&scene, &camera, &config, &options)).map_err(to_py)?;
 
@@ -422,6 +431,13 @@ fn method_specs(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
                     p.set_item("minimum", min)?;
                     p.set_item("maximum", max)?;
                 }
+                core::ParamKind::IntOrAuto { min, max } => {
+                    // An integer parameter that also takes "auto".
+                    p.set_item("type", "int")?;
+                    p.set_item("minimum", min)?;
+                    p.set_item("maximum", max)?;
+                    p.set_item("choices", vec!["auto"])?;
+                }
                 core::ParamKind::Float { min, max, min_exclusive } => {
                     p.set_item("type", "float")?;
                     p.set_item("minimum", min)?;
@@ -484,6 +500,7 @@ mod _core {
         m.add("ParameterError", super::ParameterError::type_object(py))?;
         m.add("GpuUnavailableError", super::GpuUnavailableError::type_object(py))?;
         m.add("GpuError", super::GpuError::type_object(py))?;
+        m.add("GpuFeatureError", super::GpuFeatureError::type_object(py))?;
         m.add("PenumbraIOError", super::PenumbraIOError::type_object(py))?;
         m.add("InternalError", super::InternalError::type_object(py))?;
         Ok(())

@@ -4,8 +4,11 @@
 //! default Vulkan/Metal/DX12) is listed; `WGPU_ADAPTER_NAME` keeps those whose
 //! name contains it (case-insensitive); then a discrete GPU beats an integrated
 //! one, which beats a virtual one, which beats a CPU (software) adapter such as
-//! lavapipe. Optional features (timestamp queries) are requested only where the
-//! adapter has them.
+//! lavapipe. Optional features (timestamp queries, ray queries) are requested
+//! only where the adapter has them, so that every method that needs neither
+//! works on any adapter; `PENUMBRA_DISABLE_RAY_QUERY=1` leaves ray queries
+//! off even where the adapter has them (to test the typed error of the
+//! methods that need them, see [`RAY_QUERY_ENV`]).
 
 use std::sync::{Arc, Mutex};
 
@@ -20,7 +23,19 @@ pub struct AdapterSummary {
     pub driver: String,
     pub driver_info: String,
     pub timestamp_queries: bool,
+    /// `EXPERIMENTAL_RAY_QUERY` (Vulkan `VK_KHR_ray_query`): the adapter has it
+    /// and [`RAY_QUERY_ENV`] does not turn it off. Method `raytraced` needs it.
+    pub ray_queries: bool,
     pub is_software: bool,
+}
+
+/// The environment variable that, set to anything but empty or `0`, keeps
+/// ray queries off the device even where the adapter has them.
+pub const RAY_QUERY_ENV: &str = "PENUMBRA_DISABLE_RAY_QUERY";
+
+/// Whether [`RAY_QUERY_ENV`] turns ray queries off.
+pub fn ray_queries_disabled() -> bool {
+    std::env::var(RAY_QUERY_ENV).is_ok_and(|v| !v.is_empty() && v != "0")
 }
 
 pub struct GpuContext {
@@ -69,6 +84,7 @@ fn summarize(adapter: &wgpu::Adapter) -> AdapterSummary {
         driver: info.driver.clone(),
         driver_info: info.driver_info.clone(),
         timestamp_queries: adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY),
+        ray_queries: adapter.features().contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY) && !ray_queries_disabled(),
         is_software: info.device_type == wgpu::DeviceType::Cpu,
     }
 }
@@ -107,6 +123,19 @@ pub fn adapter_summary() -> Result<AdapterSummary> {
     select_adapter().map(|a| summarize(&a))
 }
 
+/// The token wgpu asks for before it enables an `EXPERIMENTAL_` feature.
+///
+/// wgpu marks it `unsafe` because its experimental features may still hold
+/// bugs: the one taken, ray queries, is used only by method `raytraced`
+/// (acceleration-structure builds and `rayQuery*` in one compute shader), whose
+/// tests compare it with the CPU ray casting of `penumbra.raycast` and with
+/// Mitsuba. Every other method runs the same without it.
+#[allow(unsafe_code)]
+fn experimental() -> wgpu::ExperimentalFeatures {
+    // SAFETY: see above; nothing else in the crate relies on experimental features.
+    unsafe { wgpu::ExperimentalFeatures::enabled() }
+}
+
 impl GpuContext {
     pub fn new() -> Result<Self> {
         let adapter = select_adapter()?;
@@ -117,11 +146,17 @@ impl GpuContext {
         }
         // The adapter's own limits: big shadow maps and images where the hardware allows.
         let required_limits = adapter.limits();
+        let experimental_features = if summary.ray_queries {
+            required_features |= wgpu::Features::EXPERIMENTAL_RAY_QUERY;
+            experimental()
+        } else {
+            wgpu::ExperimentalFeatures::disabled()
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("penumbra::device"),
             required_features,
             required_limits,
-            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            experimental_features,
             memory_hints: wgpu::MemoryHints::MemoryUsage,
             trace: wgpu::Trace::Off,
         }))
@@ -136,6 +171,10 @@ impl GpuContext {
             }
         }));
         Ok(Self { adapter, device, queue, summary, uncaptured })
+    }
+
+    pub fn has_ray_queries(&self) -> bool {
+        self.device.features().contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
     }
 
     pub fn has_timestamps(&self) -> bool {

@@ -41,12 +41,17 @@ impl fmt::Display for ParamValue {
     }
 }
 
+/// The value of an `IntOrAuto` parameter that leaves the choice to each render.
+pub const AUTO: &str = "auto";
+
 /// What values a parameter takes.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ParamKind {
     Bool,
     /// An integer in `[min, max]`.
     Int { min: i64, max: i64 },
+    /// `"auto"` (the value is chosen per render) or an integer in `[min, max]`.
+    IntOrAuto { min: i64, max: i64 },
     /// A finite number in `[min, max]`, or `(min, max]` when `min_exclusive`.
     Float { min: f64, max: f64, min_exclusive: bool },
     /// One of the names.
@@ -66,6 +71,11 @@ pub struct ParamSpec {
 impl ParamSpec {
     pub fn int(name: &'static str, default: i64, min: i64, max: i64, doc: &'static str) -> Self {
         Self { name, kind: ParamKind::Int { min, max }, default: ParamValue::Int(default), doc }
+    }
+
+    /// `"auto"` or an integer in `[min, max]`, `default` by default.
+    pub fn int_or_auto(name: &'static str, default: i64, min: i64, max: i64, doc: &'static str) -> Self {
+        Self { name, kind: ParamKind::IntOrAuto { min, max }, default: ParamValue::Int(default), doc }
     }
 
     pub fn float(name: &'static str, default: f64, min: f64, max: f64, doc: &'static str) -> Self {
@@ -97,6 +107,7 @@ impl ParamSpec {
         match &self.kind {
             ParamKind::Bool => "a bool".into(),
             ParamKind::Int { min, max } => format!("an integer in [{min}, {max}]"),
+            ParamKind::IntOrAuto { min, max } => format!("'{AUTO}' or an integer in [{min}, {max}]"),
             ParamKind::Float { min, max, min_exclusive: false } => format!("a number in [{min}, {max}]"),
             ParamKind::Float { min, max, min_exclusive: true } => format!("a number in ({min}, {max}]"),
             ParamKind::Choice(choices) => {
@@ -119,7 +130,8 @@ impl ParamSpec {
         };
         let out = match (&self.kind, value) {
             (ParamKind::Bool, ParamValue::Bool(_)) => value.clone(),
-            (ParamKind::Int { min, max }, ParamValue::Int(v)) => {
+            (ParamKind::IntOrAuto { .. }, ParamValue::Str(s)) if s == AUTO => value.clone(),
+            (ParamKind::Int { min, max } | ParamKind::IntOrAuto { min, max }, ParamValue::Int(v)) => {
                 if v < min || v > max {
                     return Err(wrong());
                 }
@@ -193,6 +205,28 @@ impl ParamSet {
         }
     }
 
+    /// A declared `"auto"`-or-integer parameter: `None` for `"auto"`.
+    pub fn int_or_auto(&self, name: &str) -> Option<i64> {
+        match self.get(name) {
+            ParamValue::Int(v) => Some(*v),
+            ParamValue::Str(s) if s == AUTO => None,
+            other => panic!("parameter '{name}' is declared {}, read as int or auto", other.type_name()),
+        }
+    }
+
+    /// Whether the set declares `name` (a method's parameters differ).
+    pub fn has(&self, name: &str) -> bool {
+        self.values.contains_key(name)
+    }
+
+    /// The same set with `name` (declared) set to `value`, unchecked: for a
+    /// value the renderer resolves (an `"auto"` map size).
+    pub fn with(&self, name: &'static str, value: ParamValue) -> Self {
+        let mut values = self.values.clone();
+        values.insert(name, value);
+        Self { values }
+    }
+
     pub fn float(&self, name: &str) -> f64 {
         match self.get(name) {
             ParamValue::Float(v) => *v,
@@ -262,5 +296,19 @@ mod tests {
         assert!(err(&[("on", ParamValue::Int(1))]).contains("must be a bool, got int 1"));
         let e = err(&[("x", ParamValue::Int(1)), ("y", ParamValue::Int(1))]);
         assert_eq!(e, "unknown parameter(s) 'x', 'y' for method 'm'; it takes n, w, s, on, mode");
+    }
+
+    #[test]
+    fn an_int_or_auto_takes_auto_or_an_integer_in_range() {
+        let specs = vec![ParamSpec::int_or_auto("map_size", 2048, 16, 16384, "size")];
+        let set = ParamSet::parse("m", &specs, &given(&[])).unwrap();
+        assert_eq!(set.int_or_auto("map_size"), Some(2048));
+        let auto = ParamSet::parse("m", &specs, &given(&[("map_size", ParamValue::Str("auto".into()))])).unwrap();
+        assert_eq!(auto.int_or_auto("map_size"), None);
+        assert_eq!(auto.with("map_size", ParamValue::Int(512)).int_or_auto("map_size"), Some(512));
+        for bad in [ParamValue::Str("big".into()), ParamValue::Int(8), ParamValue::Float(512.0), ParamValue::Bool(true)] {
+            let e = ParamSet::parse("m", &specs, &given(&[("map_size", bad)])).unwrap_err().to_string();
+            assert!(e.contains("'auto' or an integer in [16, 16384]"), "{e}");
+        }
     }
 }

@@ -37,6 +37,7 @@ use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
+use crate::scene::PreparedScene;
 
 /// Where the light samples lie (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -153,9 +154,9 @@ pub fn light_samples(center: DVec3, radius: f64, axis: DVec3, n: u32, seed: u64)
 ///   `z = 1 - rho^2 (1 - cos_max)`), for what off-axis receivers see beyond
 ///   the hemisphere and so that no weight is unbounded near its rim.
 ///
-/// A light inside the scene's bounding sphere (`cos_max = -1`: a room, a
-/// floor wider than the light is high) is seen from every side, and half of
-/// the samples are uniform over the whole sphere (measured with
+/// A light seen from every side (`cos_max = -1`: a room around it, see
+/// [`visible_cap_cos_of`]) gets half of its samples uniform over the
+/// whole sphere (measured with
 /// benchmarks/omnidirectional.py's scenes: penumbra RMSE at 64 samples
 /// against Mitsuba, 1/8 uniform, 1/2, all uniform: Sponza 0.238, 0.106,
 /// 0.101; Cornell box 0.042, 0.029, 0.050; wide floor 0.027, 0.027, 0.062).
@@ -171,7 +172,7 @@ pub fn sphere_samples(center: DVec3, radius: f64, axis: DVec3, cos_max: f64, n: 
     }
     let cos_max = cos_max.clamp(-1.0, 0.0);
     let (e1, e2) = axis.any_orthonormal_pair();
-    // A light inside the scene's bounding sphere is seen from every side: no
+    // A light the scene surrounds is seen from every side: no
     // hemisphere faces all receivers, and the cosine set would leave those
     // beside or above it with few samples. Half are then uniform.
     let surrounded = cos_max <= -1.0;
@@ -223,6 +224,59 @@ pub fn visible_cap_cos(distance: f64, bound: f64) -> f64 {
     }
     let spread = (bound / distance).clamp(0.0, 1.0).asin();
     (std::f64::consts::FRAC_PI_2 + spread).min(std::f64::consts::PI).cos()
+}
+
+/// The cosine of the polar angle around `axis` of the cap holding every
+/// point of the light (centre `center`, radius `radius`) that a point of the
+/// scene's triangles (corners `points`) can see: at most
+/// [`visible_cap_cos`]'s bounding-sphere cap, and tighter when the triangles
+/// lie in a narrower cone. If every corner is within `theta < 90` degrees of
+/// `axis`, so is every point of the triangles (the cone is convex), and a
+/// point sees the light within 90 degrees of its direction: the cap's
+/// half-angle is `theta + 90` degrees, `cos = -sin(theta)`. A corner at or
+/// beyond 90 degrees (a room around the light: the cone is not convex), or
+/// inside the light, gives the whole sphere. So a floor wider than the light
+/// is high, whose bounding sphere holds the light, keeps the facing
+/// hemisphere's cosine samples.
+pub fn visible_cap_cos_of(center: DVec3, radius: f64, axis: DVec3, distance: f64, bound: f64, points: impl IntoIterator<Item = DVec3>) -> f64 {
+    let sphere = visible_cap_cos(distance, bound);
+    let mut sin_max = 0.0f64;
+    for p in points {
+        let d = p - center;
+        let length = d.length();
+        // A corner inside the light (or a NaN one) sees it from every side.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(length > radius) || length == 0.0 {
+            return -1.0;
+        }
+        // length > 0: the division is finite.
+        let cos = d.dot(axis) / length;
+        if cos <= 0.0 {
+            return -1.0;
+        }
+        sin_max = sin_max.max((1.0 - cos * cos).max(0.0).sqrt());
+    }
+    sphere.max(-sin_max)
+}
+
+/// The unit direction from the light's centre to the centre of the scene's
+/// bounding box (straight down when they coincide): the axis the samples
+/// are placed around.
+pub fn scene_axis(center: DVec3, scene: &PreparedScene) -> DVec3 {
+    let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
+    (scene_center - center).try_normalize().unwrap_or(DVec3::NEG_Y)
+}
+
+/// [`sphere_samples`] of the light (`center`, `radius`) for the receivers of
+/// `scene`: around [`scene_axis`], over the cap [`visible_cap_cos_of`] gives
+/// for the scene's corners. Shared by `reference` and `raytraced`.
+pub fn scene_sphere_samples(center: DVec3, radius: f64, scene: &PreparedScene, n: u32, seed: u64) -> Vec<LightSample> {
+    let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
+    let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
+    let axis = scene_axis(center, scene);
+    let corners = scene.meshes.iter().flat_map(|m| m.vertices.iter().copied());
+    let cos_max = visible_cap_cos_of(center, radius, axis, (scene_center - center).length(), bound, corners);
+    sphere_samples(center, radius, axis, cos_max, n, seed)
 }
 
 /// Layout of `SampleWeight` in `methods/reference/visibility.wgsl`.
@@ -294,20 +348,13 @@ impl Method for ReferenceShadows {
         let used = frame.pass("light_samples", |ctx, encoder, timestamps| -> Result<(usize, usize, usize)> {
             let (center, radius) = (ctx.light.center, ctx.light.radius);
             let scene = ctx.prepared;
-            let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
-            let offset = scene_center - center;
-            let axis = offset.try_normalize().unwrap_or(DVec3::NEG_Y);
             let samples = match params.sampling {
                 LightSampling::Disk => {
-                    let points = light_samples(center, radius, axis, params.n_samples, params.seed);
+                    let points = light_samples(center, radius, scene_axis(center, scene), params.n_samples, params.seed);
                     let weight = 1.0 / points.len() as f64;
                     points.into_iter().map(|position| LightSample { position, normal: None, weight }).collect()
                 }
-                LightSampling::Sphere => {
-                    let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
-                    let cos_max = visible_cap_cos(offset.length(), bound);
-                    sphere_samples(center, radius, axis, cos_max, params.n_samples, params.seed)
-                }
+                LightSampling::Sphere => scene_sphere_samples(center, radius, scene, params.n_samples, params.seed),
             };
             let points: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
             let (w, h) = ctx.size;
@@ -457,6 +504,40 @@ mod tests {
             assert!((half / solid_angle - 0.5).abs() < 0.01, "{angle} deg, d {d}: {}", half / solid_angle);
         }
         assert_eq!(sphere_samples(c, 0.0, axis, cos_max, 256, 3), vec![LightSample { position: c, normal: None, weight: 1.0 }]);
+    }
+
+    #[test]
+    fn the_cap_of_a_wide_floor_keeps_the_facing_hemisphere_and_a_room_takes_the_sphere() {
+        let (c, r, axis) = (DVec3::new(0.0, 4.0, 0.0), 0.5, DVec3::NEG_Y);
+        // A floor 20 wide, 4 below the light: its bounding sphere (radius
+        // 10 around the floor's centre, 4 away) holds the light.
+        let floor = [(-10.0, -10.0), (10.0, -10.0), (10.0, 10.0), (-10.0, 10.0)].map(|(x, z)| DVec3::new(x, 0.0, z));
+        let cos = visible_cap_cos_of(c, r, axis, 4.0, 200f64.sqrt(), floor);
+        let theta = (200f64.sqrt() / 4.0).atan();
+        assert!((cos + theta.sin()).abs() < 1e-12, "{cos}");
+        assert!(cos > -1.0);
+        // A ceiling above the light: a room, the whole sphere.
+        let room = floor.into_iter().chain(floor.map(|p| p + DVec3::Y * 5.0));
+        assert_eq!(visible_cap_cos_of(c, r, axis, 4.0, 20.0, room), -1.0);
+        // A corner inside the light, or NaN: the whole sphere.
+        assert_eq!(visible_cap_cos_of(c, r, axis, 4.0, 1.0, [c + DVec3::X * 0.25]), -1.0);
+        assert_eq!(visible_cap_cos_of(c, r, axis, 4.0, 1.0, [DVec3::NAN]), -1.0);
+        // Never wider than the bounding sphere's cap, tighter with the corners'.
+        let far = [DVec3::new(0.5, -96.0, 0.0), DVec3::new(-0.5, -96.0, 0.0)];
+        assert!((visible_cap_cos_of(c, r, axis, 100.0, 1.0, far) + 0.5 / 100.00125f64).abs() < 1e-12);
+        assert_eq!(visible_cap_cos_of(c, r, axis, 100.0, 1.0, [DVec3::new(50.0, -96.0, 0.0)]), visible_cap_cos(100.0, 1.0));
+        // Brute force: the light points a point of the floor's triangles sees are in the cap.
+        let all = sphere_samples(c, r, axis, -1.0, 4096, 1);
+        for k in 0..400 {
+            let (u, v) = ((k as f64 * 0.618).fract(), (k as f64 * 0.381).fract());
+            let p = DVec3::new(-10.0 + 20.0 * u, 0.0, -10.0 + 20.0 * v);
+            for s in &all {
+                let n = s.normal.unwrap();
+                if n.dot(p - s.position) > 0.0 {
+                    assert!(n.dot(axis) >= cos - 1e-9, "{p} sees {n} outside the cap {cos}");
+                }
+            }
+        }
     }
 
     #[test]
