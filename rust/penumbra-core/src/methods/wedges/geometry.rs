@@ -420,62 +420,58 @@ fn polyhedron_vertices(planes: &[(DVec3, f64)]) -> Vec<DVec3> {
 }
 
 /// Bins `wedges` into tiles of a `size` image seen through `view_proj`
-/// (world to clip, wgpu conventions), clipping each wedge to the box
-/// `lo..hi` (every receiver lies in it).
+/// (world to clip, wgpu conventions: depth in [0, 1]), clipping each wedge
+/// to the box `lo..hi` (every receiver lies in it) and to the camera's near
+/// plane, so that every corner left projects in front of the camera.
 pub fn bin_wedges(wedges: &[WedgeGpu], view_proj: DMat4, size: (u32, u32), lo: DVec3, hi: DVec3) -> Bins {
     let tiles_x = size.0.div_ceil(TILE);
     let tiles_y = size.1.div_ceil(TILE);
     let pad = (hi - lo).length() * 1e-3 + 1e-6;
     let (lo, hi) = (lo - DVec3::splat(pad), hi + DVec3::splat(pad));
     let v = |x: [f32; 4]| DVec3::new(f64::from(x[0]), f64::from(x[1]), f64::from(x[2]));
+    // z_clip >= 0 (the near plane), as n.x <= d, normalised.
+    let row = view_proj.row(2);
+    let near_n = -row.truncate();
+    let near = (near_n / near_n.length().max(1e-300), row.w / near_n.length().max(1e-300));
     let mut ranges: Vec<Option<(u32, u32, u32, u32)>> = Vec::with_capacity(wedges.len());
     let mut culled = 0;
     for w in wedges {
         let (a, b) = (v(w.a), v(w.b));
-        // As n.x <= d: front <= 0, back >= 0, left >= 0, right >= 0, and the box.
+        // As n.x <= d: front <= 0, back >= 0, left >= 0, right >= 0, the box, the near plane.
         let mut planes = vec![
             (v(w.front), v(w.front).dot(a)),
             (-v(w.back), -v(w.back).dot(a)),
             (-v(w.left), -v(w.left).dot(a)),
             (-v(w.right), -v(w.right).dot(b)),
+            near,
         ];
         for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
             planes.push((axis, axis.dot(hi)));
             planes.push((-axis, -axis.dot(lo)));
         }
         let corners = polyhedron_vertices(&planes);
-        if corners.is_empty() {
-            culled += 1;
-            ranges.push(None);
-            continue;
-        }
-        let mut full = false;
         let (mut x0, mut y0, mut x1, mut y1) = (f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
-        for c in corners {
+        for c in &corners {
             let clip: DVec4 = view_proj * c.extend(1.0);
-            if clip.w <= 1e-9 * (clip.x.abs() + clip.y.abs() + 1.0) {
-                full = true;
-                break;
-            }
+            // In front of the near plane, so w >= near > 0 (up to rounding).
+            let w = clip.w.max(1e-300);
             // NDC to pixels: x right, y up in NDC; image row 0 at the top.
-            let px = (clip.x / clip.w * 0.5 + 0.5) * f64::from(size.0);
-            let py = (0.5 - clip.y / clip.w * 0.5) * f64::from(size.1);
+            let px = (clip.x / w * 0.5 + 0.5) * f64::from(size.0);
+            let py = (0.5 - clip.y / w * 0.5) * f64::from(size.1);
             x0 = x0.min(px);
             y0 = y0.min(py);
             x1 = x1.max(px);
             y1 = y1.max(py);
         }
-        let range = if full {
-            Some((0, 0, tiles_x - 1, tiles_y - 1))
+        // A pixel of margin for rounding; empty or off screen means culled.
+        let (x0, y0, x1, y1) = (x0 - 1.0, y0 - 1.0, x1 + 1.0, y1 + 1.0);
+        let range = if corners.is_empty() || !(x0.is_finite() && y0.is_finite() && x1.is_finite() && y1.is_finite()) {
+            None
+        } else if x1 < 0.0 || y1 < 0.0 || x0 > f64::from(size.0) || y0 > f64::from(size.1) {
+            None
         } else {
-            // A pixel of margin for rounding; off screen means culled.
-            let (x0, y0, x1, y1) = (x0 - 1.0, y0 - 1.0, x1 + 1.0, y1 + 1.0);
-            if x1 < 0.0 || y1 < 0.0 || x0 > f64::from(size.0) || y0 > f64::from(size.1) {
-                None
-            } else {
-                let t = |p: f64, n: u32| ((p.max(0.0) / f64::from(TILE)) as u32).min(n - 1);
-                Some((t(x0, tiles_x), t(y0, tiles_y), t(x1, tiles_x), t(y1, tiles_y)))
-            }
+            let t = |p: f64, n: u32| ((p.max(0.0) / f64::from(TILE)) as u32).min(n - 1);
+            Some((t(x0, tiles_x), t(y0, tiles_y), t(x1, tiles_x), t(y1, tiles_y)))
         };
         culled += usize::from(range.is_none());
         ranges.push(range);
@@ -661,6 +657,13 @@ mod tests {
             let n = bins.indices.iter().filter(|&&x| x == i).count();
             assert!(n > 0 && n < 16, "{i}: {n}");
         }
+        // A camera inside the box: the wedges are clipped at its near plane,
+        // not binned everywhere.
+        let inside = crate::scene::Camera { eye: [0.0, 1.0, 4.0], target: [0.0; 3], up: [0.0, 1.0, 0.0], fov_y_degrees: 60.0, width: 64, height: 64 };
+        let (p, _, _) = inside.projection(glam::Vec3::new(-5.0, -0.1, -5.0), glam::Vec3::new(5.0, 2.5, 5.0));
+        let near_view = DMat4::from_cols_array(&(p * inside.view()).to_cols_array().map(f64::from));
+        let close = bin_wedges(&w.wedges, near_view, (64, 64), DVec3::new(-5.0, -0.1, -5.0), DVec3::new(5.0, 2.5, 5.0));
+        assert!(close.indices.len() < 4 * 16 && !close.indices.is_empty(), "{}", close.indices.len());
         // A box that ends above the wedges culls them all.
         let culled = bin_wedges(&w.wedges, view_proj, (64, 64), DVec3::new(-5.0, 3.0, -5.0), DVec3::new(5.0, 4.0, 5.0));
         assert_eq!(culled.culled, 4);
