@@ -151,7 +151,8 @@ def test_first_command_compares_every_method(needs_mitsuba_and_gpu: None, tmp_pa
     assert sorted(names) == sorted(penumbra.methods()) and names[-1] == "reference"
     for m in figures["methods"]:
         assert m["warm_ms"] == statistics.median(m["timed_ms"]) and m["cold_ms"] > 0
-        assert m["params"]["map_size"] == 512, "--param goes to every method"
+        if "map_size" in penumbra.method_info(m["method"]).defaults():
+            assert m["params"]["map_size"] == 512, "--param goes to every method that takes it"
         assert np.isfinite(m["metrics"]["visibility_rmse_penumbra"])
     hard = next(m for m in figures["methods"] if m["method"] == "hard")
     assert hard["time_over_hard"] == 1.0 and figures["hard_warm_ms"] == hard["warm_ms"]
@@ -178,13 +179,19 @@ def test_compare_picks_methods_and_times_against_hard(needs_mitsuba_and_gpu: Non
 def test_compare_a_mesh_file_skips_methods_that_refuse_it(needs_mitsuba_and_gpu: None, tmp_path: Path) -> None:
     closed = trimesh.creation.box(extents=(1, 2, 1))
     trimesh.Trimesh(closed.vertices, closed.faces[2:], process=False).export(tmp_path / "open.obj")
-    # pvm and pvmf render open meshes (docs/real_meshes.md); pvm refuses the
-    # pvmf parameter given to every method compared, and is skipped.
+    # pvm and pvmf render open meshes (docs/real_meshes.md); a parameter goes
+    # to the methods that declare it (n_blur to pvmf alone); with
+    # open_edges="error" pvm refuses the open mesh and is skipped.
     done = first_command(tmp_path, "--mesh", "open.obj", "--method", "pvmf", "--method", "pvm", "--param", "n_blur=0", "--json", "f.json", "-q")
     assert done.returncode == 0, done.stderr
     figures = json.loads((tmp_path / "f.json").read_text())
-    assert figures["scene"] == "open.obj" and [m["method"] for m in figures["methods"]] == ["pvmf"]
-    assert "n_blur" in figures["skipped"]["pvm"] and "skipped pvm" in done.stdout
+    assert figures["scene"] == "open.obj" and [m["method"] for m in figures["methods"]] == ["pvmf", "pvm"]
+    assert figures["methods"][0]["params"]["n_blur"] == 0 and "n_blur" not in figures["methods"][1]["params"]
+    done = first_command(tmp_path, "--mesh", "open.obj", "--method", "hard", "--method", "pvm", "--param", "open_edges=error", "--json", "f.json", "-q")
+    assert done.returncode == 0, done.stderr
+    figures = json.loads((tmp_path / "f.json").read_text())
+    assert [m["method"] for m in figures["methods"]] == ["hard"]
+    assert "not closed" in figures["skipped"]["pvm"] and "skipped pvm" in done.stdout
 
 
 def test_compare_refuses_unknown_methods_and_lone_refusals(needs_mitsuba_and_gpu: None, tmp_path: Path) -> None:

@@ -245,6 +245,24 @@ def comparison_figure(c: Comparison, path: str | os.PathLike[str]) -> None:
 # Every method at once: ``penumbra compare``.
 
 
+def _params_per_method(names: list[str], params: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """``params`` split by method: each method gets those it declares (an
+    unimplemented method gets them all, and refuses itself); a parameter no
+    method declares is refused here, naming it."""
+    from penumbra.render import method_info
+
+    declared: dict[str, set[str] | None] = {}
+    for name in names:
+        try:
+            declared[name] = set(method_info(name).defaults())
+        except ParameterError:
+            declared[name] = None
+    unused = [k for k in params if not any(d is None or k in d for d in declared.values())]
+    if unused:
+        raise ParameterError(f"unknown parameter(s) {unused}: declared by none of the methods compared ({names}); see penumbra.method_info")
+    return {name: {k: v for k, v in params.items() if d is None or k in d} for name, d in declared.items()}
+
+
 def _default_order() -> list[str]:
     """Implemented methods, ``reference`` (the in-engine yardstick) last."""
     names = implemented_methods()
@@ -365,7 +383,10 @@ def compare_methods(
     """Every method in ``methods`` (default: every implemented one,
     ``reference`` last) against Mitsuba ground truth of ``scene``, each timed
     with :func:`timed_render` (``repeats``, ``budget_s``) in this one run, ``hard`` too (the time ratios'
-    baseline) when it is not among them. ``params`` go to every method.
+    baseline) when it is not among them. ``params`` go to every method that
+    declares them (``map_size`` to the shadow-mapped ones, not to
+    ``raytraced``); one that no method compared declares is a
+    :class:`~penumbra.errors.ParameterError`.
 
     When more than one method is asked, a method that refuses the scene or the
     parameters (a :class:`~penumbra.errors.InvalidInputError`) is skipped
@@ -384,6 +405,7 @@ def compare_methods(
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
         raise ParameterError(f"repeats must be an integer of at least 1, got {repeats!r}")
     params = dict(params or {})
+    own = _params_per_method(names, params)
     say = progress or (lambda line: None)
     renderer = renderer or timing_renderer()
     camera = camera or scene.camera
@@ -402,7 +424,7 @@ def compare_methods(
         role = "" if name in names else ", the time baseline, with its defaults"
         say(f"{name} ({i}/{len(timed_names)}{role}): warm-up render")
         try:
-            warm[name] = _uncached_render(renderer, scene, name, camera, params if name in names else {})
+            warm[name] = _uncached_render(renderer, scene, name, camera, own[name] if name in names else {})
         except InvalidInputError as e:
             if len(names) == 1:
                 raise
@@ -427,7 +449,7 @@ def compare_methods(
             break
         say(f"timed round {round_}/{repeats}: {', '.join(active)}")
         for name in active:
-            last[name] = _uncached_render(renderer, scene, name, camera, params if name in names else {})
+            last[name] = _uncached_render(renderer, scene, name, camera, own[name] if name in names else {})
             timed[name].append(last[name].total_ms)
     timings = {name: Timing(cold[name], timed[name], last[name].timing_source) for name in warm}
     for name in warm:
