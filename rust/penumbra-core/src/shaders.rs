@@ -59,6 +59,7 @@ pub const FILES: &[(&str, &str)] = &[
     ("methods/backprojection/classify.wgsl", include_str!("methods/backprojection/classify.wgsl")),
     ("methods/backprojection/visibility.wgsl", include_str!("methods/backprojection/visibility.wgsl")),
     ("methods/backprojection/pull_push.wgsl", include_str!("methods/backprojection/pull_push.wgsl")),
+    ("methods/wedges/visibility.wgsl", include_str!("methods/wedges/visibility.wgsl")),
 ];
 
 const IMPORT: &str = "#import ";
@@ -190,7 +191,7 @@ macro_rules! gpu_struct {
 
 /// Every Rust struct a pass uploads for a shader, with its WGSL twin.
 pub fn gpu_structs() -> Vec<GpuStruct> {
-    use crate::methods::{adaptive, backprojection, pcf, pcss, pvm, pvmf, raytraced, reference};
+    use crate::methods::{adaptive, backprojection, pcf, pcss, pvm, pvmf, raytraced, reference, wedges};
     use crate::passes::{gbuffer, shading, shadow_map, shadow_test};
     vec![
         gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
@@ -217,6 +218,8 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
         gpu_struct!(backprojection::PullPushUniform => "PullPushStep" in "methods/backprojection/pull_push.wgsl" {
             mode, width, height, offset, other_width, other_height, other_offset, pad
         }),
+        gpu_struct!(wedges::WedgeGpu => "Wedge" in "methods/wedges/visibility.wgsl" { a, b, dir, front, back, hard, left, right, u_left, u_right }),
+        gpu_struct!(wedges::WedgeSettingsUniform => "WedgeSettings" in "methods/wedges/visibility.wgsl" { tiles }),
     ]
 }
 

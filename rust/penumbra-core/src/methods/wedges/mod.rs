@@ -1,0 +1,285 @@
+//! Method `wedges`: penumbra wedges (Akenine-Möller & Assarsson 2002).
+//!
+//! Pass 1 is the shadow map of `hard`, the hard shadow from the light
+//! centre. Pass 2 builds, on the CPU, a penumbra wedge per silhouette edge
+//! of the light centre (4.1: front and back planes through the edge and the
+//! points c -+ r n, side planes shared by consecutive edges, extra wedges at
+//! acute vertices) and bins them by the screen tiles their part inside the
+//! scene's box covers. Pass 3, a compute pass over the G-buffer, adds for
+//! every wedge holding the pixel's point the interpolated intensity of 4.2
+//! (Eq. 1-3) minus the hard step of that wedge's shadow-volume quad to the
+//! hard shadow, and clamps the sum to [0, 1].
+//!
+//! Why the shadow map rather than the paper's shadow-volume count along the
+//! camera ray: the two agree where the silhouette loops close and the
+//! camera is lit (the wedges' entry and exit terms telescope to the count),
+//! and the map stays right where they do not: junction vertices, edges
+//! hidden from the light and open casters leave loops open, which a count
+//! turns into unbounded streaks; with the map an error stays inside the
+//! wedges. Radius 0 is then exactly `hard`. docs/methods/wedges.md measures it.
+//!
+//! The silhouettes, their caches and the open/non-manifold caster decision
+//! are `pvm`'s (`crate::silhouettes`); the `repairs` levels reuse its
+//! `Repairs` ("cone" for the shared side lines, "hidden", "horizon").
+
+use std::sync::Arc;
+
+use bytemuck::Zeroable;
+use glam::DMat4;
+
+use crate::error::Result;
+use crate::frame::{Frame, Intermediate};
+use crate::gpu::layout;
+use crate::gpu::pool::{Binding, PooledBuffer};
+use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
+use crate::pass_cache::{CachedPass, PassKey};
+use crate::passes::screen::ScreenPass;
+use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::shadow_test::ShadowMapSettings;
+use crate::silhouettes::{OpenEdges, Repairs, SceneSilhouette};
+
+pub mod geometry;
+pub use geometry::{bin_wedges, penumbra_wedges, wedge_intensity, Bins, WedgeGpu, WedgeStats, Wedges, TILE};
+
+/// The values of `repairs`, cumulative in the order docs/methods/wedges.md
+/// measures them; "all" adds the horizon to the last.
+pub const REPAIR_LEVELS: [&str; 4] = ["all", "none", "hidden", "cone+hidden"];
+
+/// The wedges and their screen bins (pass 2), as the pass cache keeps them.
+pub const PENUMBRA_WEDGES: CachedPass = CachedPass { name: "penumbra_wedges", capacity: 1 };
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct WedgesParams {
+    pub shadow: ShadowMapSettings,
+    /// Extra wedges per 120 degrees of turn at acute silhouette vertices (4.1, Figure 7).
+    pub acute_wedges: u32,
+    /// Parker et al.'s 3s^2 - 2s^3 attenuation (4.2, last paragraph).
+    pub falloff: bool,
+    pub open_edges: OpenEdges,
+    pub repairs: Repairs,
+    /// Where the hard shadow map is read for a pixel inside wedges (`HardTerm`).
+    pub hard_term: HardTerm,
+}
+
+/// Where the shadow map is read for a pixel inside wedges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HardTerm {
+    /// At the pixel (moved a few texels off a quad plane it nearly lies
+    /// on, to h's side); each wedge adds s - h.
+    AtPoint,
+    /// On the lit side of every holding wedge's quad; each wedge adds s - 1.
+    /// The map then counts only the other casters' shadows, which the
+    /// wedges' intensities join by the paper's sum (its shadow-volume count).
+    LitSide,
+}
+
+impl HardTerm {
+    pub const NAMES: [&'static str; 2] = ["at_point", "lit_side"];
+}
+
+/// The visibility pass's settings (`WedgeSettings` in visibility.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct WedgeSettingsUniform {
+    pub tiles: [u32; 4],
+}
+
+/// Pass 2's output.
+pub struct WedgeBuffers {
+    pub wedges: PooledBuffer,
+    pub offsets: PooledBuffer,
+    pub indices: PooledBuffer,
+    pub tiles_x: u32,
+    pub count: u32,
+    pub stats: WedgeStats,
+    pub silhouette_cache_hits: usize,
+}
+
+pub struct PenumbraWedges {
+    visibility: ScreenPass,
+}
+
+impl Method for PenumbraWedges {
+    const NAME: &'static str = "wedges";
+    const PAPER: &'static str = "penumbra wedges (Akenine-Möller & Assarsson 2002, 4.1-4.2)";
+    type Params = WedgesParams;
+
+    fn specs() -> Vec<ParamSpec> {
+        let mut specs = ShadowMapSettings::specs("slope");
+        specs.extend([
+            ParamSpec::int(
+                "acute_wedges",
+                0,
+                0,
+                64,
+                "extra wedges at acute silhouette vertices (4.1, Figure 7), per 120 degrees of turn (0: one wedge per edge, the base algorithm)",
+            ),
+            ParamSpec::choice(
+                "hard_term",
+                "at_point",
+                &HardTerm::NAMES,
+                "where the hard shadow map is read inside wedges: at the pixel (each wedge adds s - h), or on the lit side of every holding wedge's quad (each adds s - 1: overlapping casters summed as the paper's count)",
+            ),
+            ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
+            ParamSpec::choice(
+                "open_edges",
+                "silhouette",
+                &OpenEdges::NAMES,
+                "edges that are not two-sided (open and non-manifold meshes): silhouette edges where all their faces lie on one side of the plane through them and the light (as pvm), or refuse such meshes",
+            ),
+            ParamSpec::choice(
+                "repairs",
+                "all",
+                &REPAIR_LEVELS,
+                "departures from the paper for real meshes, cumulative: none, hidden (no wedge for silhouette edges hidden from the light centre), cone+hidden (shared side lines kept in their vertex's light cone), all (+ the light below the receiver's horizon hidden)",
+            ),
+        ]);
+        specs
+    }
+
+    fn params(p: &ParamSet) -> Result<WedgesParams> {
+        let level = p.choice("repairs");
+        let repairs = match level {
+            "all" => Repairs { cone: true, hidden: true, horizon: true, centre: false, distance: false },
+            other => Repairs::parse(other),
+        };
+        Ok(WedgesParams {
+            shadow: ShadowMapSettings::from_params(p),
+            acute_wedges: p.int("acute_wedges") as u32,
+            falloff: p.bool("falloff"),
+            open_edges: OpenEdges::parse(p.choice("open_edges")),
+            repairs,
+            hard_term: if p.choice("hard_term") == "lit_side" { HardTerm::LitSide } else { HardTerm::AtPoint },
+        })
+    }
+
+    fn cached_passes() -> &'static [CachedPass] {
+        &[CENTRE_MAP, PENUMBRA_WEDGES]
+    }
+
+    fn new(device: &wgpu::Device, pool: &crate::gpu::pool::ResourcePool) -> Self {
+        let visibility = ScreenPass::new(
+            device,
+            pool,
+            "wedges::visibility_pass",
+            crate::shaders::compose("methods/wedges/visibility.wgsl"),
+            &[
+                layout::depth_array,
+                layout::parameters,
+                layout::storage_buffer,
+                layout::storage_buffer,
+                layout::storage_buffer,
+                layout::parameters,
+                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                layout::storage_buffer_rw,
+            ],
+            &["main"],
+        );
+        Self { visibility }
+    }
+
+    fn record(&self, frame: &mut Frame<'_>, params: &WedgesParams) -> Result<MethodOutput> {
+        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let light = frame.ctx.light;
+        let mut key = PassKey::new(PENUMBRA_WEDGES.name);
+        key.key(&frame.ctx.gbuffer_key)
+            .f64s(&light.center.to_array())
+            .f64s(&[light.radius])
+            .u32(params.acute_wedges)
+            .bytes(params.open_edges.name().as_bytes())
+            .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden)]);
+        let mut fresh = false;
+        let wedges = frame.cached(PENUMBRA_WEDGES.name, key.finish(), |frame| {
+            fresh = true;
+            Self::record_wedges(frame, params).map(Arc::new)
+        })?;
+        let visibility = frame.ctx.screen_texture("wedges::visibility");
+        let hard = frame.ctx.screen_texture("wedges::hard");
+        let intensity = frame.ctx.screen_texture("wedges::intensity");
+        let counter = frame.pass("visibility", |ctx, encoder, ts| {
+            let counter = ctx.counters("wedges::pixels_in_wedge", 1, encoder);
+            let flags = u32::from(params.falloff) | (u32::from(params.repairs.horizon) << 1) | (u32::from(params.hard_term == HardTerm::LitSide) << 2);
+            let test = ctx.parameters("wedges::shadow_test", &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0));
+            let settings = ctx.parameters("wedges::settings", &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count] });
+            let resources = [
+                Binding::Texture(&map),
+                Binding::Buffer(&test),
+                Binding::Buffer(&wedges.wedges),
+                Binding::Buffer(&wedges.offsets),
+                Binding::Buffer(&wedges.indices),
+                Binding::Buffer(&settings),
+                Binding::Texture(&visibility),
+                Binding::Texture(&hard),
+                Binding::Texture(&intensity),
+                Binding::Buffer(&counter),
+            ];
+            self.visibility.run(ctx, encoder, &resources, ts);
+            counter
+        })?;
+        let s = &wedges.stats;
+        frame.stat("silhouette_edges", s.silhouette_edges as i64);
+        frame.stat("wedges", s.wedges as i64);
+        frame.stat("extra_wedges", s.extra_wedges as i64);
+        frame.stat("culled_wedges", s.culled_wedges as i64);
+        frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
+        frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
+        frame.stat("hidden_silhouette_edges", s.hidden_edges as i64);
+        frame.stat("side_line_fallbacks", s.side_fallbacks as i64);
+        frame.stat("binned_wedge_tiles", s.binned as i64);
+        frame.stat("silhouette_cache_hits", if fresh { wedges.silhouette_cache_hits as i64 } else { 0 });
+        frame.counters(&counter, &["pixels_in_wedge"]);
+        frame.intermediate(Intermediate::color("wedges_hard", &hard, 1));
+        frame.intermediate(Intermediate::color("wedges_intensity", &intensity, 1));
+        Ok(MethodOutput { visibility })
+    }
+}
+
+impl PenumbraWedges {
+    /// Pass 2: the wedges of every silhouette edge (4.1) and their screen bins.
+    fn record_wedges(frame: &mut Frame<'_>, params: &WedgesParams) -> Result<WedgeBuffers> {
+        frame.pass("penumbra_wedges", |ctx, _encoder, _ts| -> Result<WedgeBuffers> {
+            let (l, r) = (ctx.light.center, ctx.light.radius);
+            let mut built = Wedges::default();
+            let mut cache_hits = 0;
+            // A point light has no penumbra: no wedges, the hard shadow alone.
+            if r > 0.0 {
+                let silhouette = if params.repairs.hidden {
+                    ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges)?
+                } else {
+                    let (edges, cache_hits) = ctx.shared.silhouettes.edges(ctx.prepared, l, params.open_edges)?;
+                    SceneSilhouette { edges, cache_hits, hidden_edges: 0 }
+                };
+                cache_hits = silhouette.cache_hits;
+                built = penumbra_wedges(&silhouette.edges, l, r, params.acute_wedges, params.repairs.cone);
+                built.stats.hidden_edges = silhouette.hidden_edges;
+                built.stats.silhouette_edges += silhouette.hidden_edges;
+            }
+            let camera = ctx.camera;
+            let (projection, _, _) = camera.projection(ctx.prepared.bounds_min, ctx.prepared.bounds_max);
+            let view_proj = DMat4::from_cols_array(&(projection * camera.view()).to_cols_array().map(f64::from));
+            let bins = bin_wedges(&built.wedges, view_proj, ctx.size, ctx.prepared.bounds_min.as_dvec3(), ctx.prepared.bounds_max.as_dvec3());
+            built.stats.culled_wedges = bins.culled;
+            built.stats.binned = bins.indices.len();
+            // A storage binding may not be empty: one zeroed entry stands for none.
+            let upload = |label: &str, bytes: &[u8]| {
+                let buffer = ctx.buffer(label, bytes.len().max(16) as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
+                ctx.queue.write_buffer(&buffer, 0, bytes);
+                buffer
+            };
+            let wedge_list = if built.wedges.is_empty() { vec![WedgeGpu::zeroed()] } else { built.wedges.clone() };
+            let indices = if bins.indices.is_empty() { vec![0u32; 4] } else { bins.indices.clone() };
+            Ok(WedgeBuffers {
+                wedges: upload("wedges::wedges", bytemuck::cast_slice(&wedge_list)),
+                offsets: upload("wedges::tile_offsets", bytemuck::cast_slice(&bins.offsets)),
+                indices: upload("wedges::tile_wedges", bytemuck::cast_slice(&indices)),
+                tiles_x: bins.tiles_x,
+                count: built.wedges.len() as u32,
+                stats: built.stats,
+                silhouette_cache_hits: cache_hits,
+            })
+        })?
+    }
+}

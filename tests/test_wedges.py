@@ -1,0 +1,261 @@
+"""Penumbra wedges (issue 19; Akenine-Möller & Assarsson 2002, 4.1-4.2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra.scenes import box, ground_plane, ground_slab, sphere
+from stress_scenes import FAST, check_images
+from test_degenerate_geometry import CASES
+from test_pvm import disk_cut_visible_fraction, finned_box, long_edge_scene
+from test_real_meshes import SUITE, check_against_truth, truth, truth_of  # noqa: F401 (truth: a fixture)
+
+RADII = [0.0, 1e-4, 0.05, 0.5, 2.2]
+
+
+def ground_band(result: penumbra.RenderResult, columns: slice) -> np.ndarray:
+    """Penumbra pixels (0.02 < v < 0.98) on the ground's +z half in `columns`."""
+    v = result.visibility[:, columns]
+    return (result.object_id[:, columns] == 0) & (result.position[:, columns, 2] > 0.0) & (v > 0.02) & (v < 0.98)
+
+
+# Measured (this file's first commit, lavapipe, map 2048): the largest
+# difference between wedges' Eq. 1-3 interpolation and the exact fraction of
+# the disk the edge's plane cuts, over the penumbra of one long edge:
+# 0.070 at r = 0.3, 0.094 at r = 0.8 (RMS 0.045, 0.053). Most of it is the
+# shape of the falloff (linear across the wedge against the disk segment's
+# S-curve: 0.055 at most between the two in the chord's offset); the rest
+# grows with r / distance, as the planes through c -+ r n are not tangent to
+# the sphere (4.1). The bounds leave a tenth for other drivers' rasterisers.
+SINGLE_EDGE_BOUND = {0.3: (0.08, 0.05), 0.8: (0.10, 0.06)}
+
+
+@pytest.mark.parametrize("radius", list(SINGLE_EDGE_BOUND))
+def test_a_single_edge_follows_the_disk_cut_within_the_measured_tolerance(renderer: penumbra.Renderer, radius: float) -> None:
+    scene = long_edge_scene(radius)
+    result = renderer.render(scene, "wedges", intermediates=True)
+    columns = slice(70, 90)
+    inside = ground_band(result, columns)
+    p = result.position[:, columns][inside].astype(np.float64)
+    assert len(p) > 200, "the columns cross the penumbra"
+    k = disk_cut_visible_fraction(p, np.array([-4.0, 2.1, 1.5]), np.array([4.0, 2.1, 1.5]), scene.light.center.astype(float), radius, np.array([0.0, 2.0, 0.0]))
+    assert k.min() < 0.1 and k.max() > 0.9, "the band spans the penumbra"
+    error = result.visibility[:, columns][inside] - k
+    worst, rms = SINGLE_EDGE_BOUND[radius]
+    assert np.abs(error).max() <= worst and np.sqrt(np.mean(error**2)) <= rms, (np.abs(error).max(), np.sqrt(np.mean(error**2)))
+    # The interpolation is symmetric about the hard-shadow plane: too lit on
+    # the umbra side, too dark on the lit side, by the S-curve's shape.
+    assert error[k < 0.3].mean() > 0 > error[k > 0.7].mean()
+
+
+def penumbra_width(result: penumbra.RenderResult) -> int:
+    return int(ground_band(result, slice(70, 90)).sum())
+
+
+def test_penumbra_widens_with_the_light_radius(renderer: penumbra.Renderer) -> None:
+    widths = [penumbra_width(renderer.render(long_edge_scene(r), "wedges")) for r in (0.1, 0.3, 0.8)]
+    assert 0 < widths[0] < widths[1] < widths[2], widths
+
+
+def test_penumbra_widens_with_the_distance_from_occluder_to_receiver(renderer: penumbra.Renderer) -> None:
+    base = long_edge_scene(0.5)
+    widths = []
+    for height in (1.0, 2.0, 3.0):
+        bar = box((0.0, height, 0.0), (8.0, 0.2, 3.0), object_id=1, name="bar")
+        widths.append(penumbra_width(renderer.render(penumbra.Scene([ground_slab(), bar], base.light, base.camera), "wedges")))
+    assert 0 < widths[0] < widths[1] < widths[2], widths
+
+
+@pytest.mark.parametrize("name", penumbra.scenes.names())
+def test_radius_zero_is_hard_and_every_radius_stays_finite_in_0_1(renderer: penumbra.Renderer, name: str) -> None:
+    for radius in RADII:
+        scene = penumbra.scenes.get(name, width=64, height=64, light_radius=radius)
+        result = renderer.render(scene, "wedges", intermediates=True)
+        check_images(result, f"{name} r={radius}")
+        s = result.stats
+        if radius == 0:
+            # A point light has no penumbra: no wedges, the shadow-map test alone.
+            assert s["wedges"] == 0 and s["pixels_in_wedge"] == 0
+            np.testing.assert_array_equal(result.visibility, renderer.render(scene, "hard").visibility)
+        else:
+            edges = s["silhouette_edges"] - s["light_parallel_edges"] - s["hidden_silhouette_edges"]
+            assert s["wedges"] == edges + s["extra_wedges"], s
+            # (At r = 1e-4 the wedges are thinner than a pixel.)
+            assert s["pixels_in_wedge"] > 0 or radius < 0.05, s
+            # Where the light's centre is above the surface, the signed
+            # intensity before clamping is what was clamped (the horizon
+            # repair only lowers it); below, the horizon's sliver is all.
+            facing = ((scene.light.center - result.position) * result.normal).sum(-1) > 0
+            assert (result.visibility[facing] <= np.clip(result["wedges_intensity"][facing], 0, 1) + 1e-6).all()
+
+
+def test_intermediates_and_stats_explain_the_image(renderer: penumbra.Renderer) -> None:
+    scene = long_edge_scene(0.5)
+    result = renderer.render(scene, "wedges", intermediates=True, repairs="cone+hidden")
+    hard = renderer.render(scene, "hard").visibility
+    intensity = result["wedges_intensity"]
+    np.testing.assert_allclose(result.visibility, np.clip(intensity, 0, 1), atol=1e-6)
+    # Outside every wedge the signed intensity is the hard term, and the hard term is `hard`.
+    outside = intensity == result["wedges_hard"]
+    assert outside.mean() > 0.5
+    assert (result["wedges_hard"][outside] == hard[outside]).mean() > 0.999
+    # A pixel whose intensity is not its hard term is inside a wedge.
+    assert result.stats["pixels_in_wedge"] >= int((intensity != result["wedges_hard"]).sum()) > 0
+    assert list(result.timings)[:4] == ["gbuffer", "shadow_map", "penumbra_wedges", "visibility"]
+
+
+def test_pass_cache_reuses_the_wedges(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get("overlapping_casters", width=48, height=48)
+    renderer.clear_pass_cache()
+    first = renderer.render(scene, "wedges", map_size=512)
+    again = renderer.render(scene, "wedges", map_size=512)
+    assert again.reused_passes == ["gbuffer", "penumbra_wedges", "shadow_map"]
+    np.testing.assert_array_equal(first.visibility, again.visibility)
+    # Another acute_wedges value rebuilds the wedges from cached silhouettes.
+    other = renderer.render(scene, "wedges", map_size=512, acute_wedges=4)
+    assert "penumbra_wedges" not in other.reused_passes
+    assert other.stats["silhouette_cache_hits"] == len(scene.meshes)
+
+
+def test_degenerate_silhouettes_stay_finite_and_in_0_1(renderer: penumbra.Renderer) -> None:
+    """Collinear edges, a vertical edge under the light, junction vertices
+    and a 0.1-radian spike (the degenerate suite's scenes) with lights from tiny to wider than the casters, with and without
+    extra wedges and with the paper's construction: finite, in [0, 1], and
+    the stats name the degeneracy."""
+    for case, (build, _) in CASES.items():
+        base = build()
+        for radius in (1e-4, 0.4, 1.5):
+            light = penumbra.SphereLight(base.light.center, radius, intensity=40.0)
+            s = base.with_light(light)
+            for params in ({}, {"acute_wedges": 8}, {"repairs": "none"}, {"hard_term": "lit_side"}):
+                result = renderer.render(s, "wedges", **FAST["wedges"], **params)
+                check_images(result, f"{case} r={radius} {params}")
+                if case == "vertex_with_four_silhouette_edges" and radius == 0.4:
+                    assert result.stats["silhouette_junction_vertices"] >= 1, result.stats
+                if case == "acute_corner" and radius == 0.4 and params.get("acute_wedges"):
+                    assert result.stats["extra_wedges"] > 0, result.stats
+
+
+def test_open_and_non_manifold_casters_get_pvms_decision(renderer: penumbra.Renderer) -> None:
+    """The silhouettes are pvm's: the same edges of open and non-manifold
+    casters (open_edges="silhouette"), the same refusal with "error"."""
+    base = penumbra.scenes.get(width=48, height=48)
+    bar, fin = finned_box()
+    clean = penumbra.Scene([ground_slab(), bar], base.light, base.camera)
+    finned = penumbra.Scene([ground_slab(), fin], base.light, base.camera)
+    for s in (clean, finned):
+        assert renderer.render(s, "wedges").stats["silhouette_edges"] == renderer.render(s, "pvm").stats["silhouette_edges"]
+    with pytest.raises(penumbra.MeshError, match=r"mesh 'finned'.*not a 2-manifold"):
+        renderer.render(finned, "wedges", open_edges="error")
+    # A duplicated face lies where its twin does: the same shadow.
+    np.testing.assert_array_equal(renderer.render(finned, "wedges").visibility, renderer.render(clean, "wedges").visibility)
+
+    open_scene = penumbra.Scene([ground_plane(), sphere((0.0, 1.6, 0.0), 1.0)], base.light, base.camera)
+    with pytest.raises(penumbra.MeshError, match=r"mesh 'ground'.*boundary edges"):
+        renderer.render(open_scene, "wedges", open_edges="error")
+    assert renderer.render(open_scene, "wedges").stats["silhouette_edges"] == renderer.render(open_scene, "pvm").stats["silhouette_edges"]
+
+
+def test_parameters_are_checked(renderer: penumbra.Renderer) -> None:
+    scene = penumbra.scenes.get(width=16, height=16)
+    with pytest.raises(penumbra.ParameterError, match="acute_wedges"):
+        renderer.render(scene, "wedges", acute_wedges=-1)
+    with pytest.raises(penumbra.ParameterError, match="hard_term"):
+        renderer.render(scene, "wedges", hard_term="nowhere")
+    with pytest.raises(penumbra.ParameterError, match="repairs"):
+        renderer.render(scene, "wedges", repairs="centre")
+    params = renderer.render(scene, "wedges").params
+    assert (params["acute_wedges"], params["falloff"], params["hard_term"], params["repairs"]) == (0, False, "at_point", "all")
+
+
+def test_wedges_beat_hard_against_ground_truth_on_every_builtin_scene(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
+    pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
+    from penumbra import metrics
+
+    cache = tmp_path_factory.mktemp("gt")
+    for name in penumbra.scenes.names():
+        scene = penumbra.scenes.get(name, width=96, height=96)
+        gt = pm.ground_truth(scene, spp=256, cache_dir=cache)
+        hard = metrics.compare(renderer.render(scene, "hard"), gt)
+        wedges = metrics.compare(renderer.render(scene, "wedges"), gt)
+        # Measured at 96x96: wedges' penumbra RMSE is 0.15-0.46 of hard's.
+        assert wedges["visibility_rmse_penumbra"] < 0.55 * hard["visibility_rmse_penumbra"], (name, wedges, hard)
+        stray, out_of = metrics.stray_pixels(renderer.render(scene, "wedges").visibility, gt.visibility)
+        assert stray <= 0.002 * out_of, (name, stray, out_of)
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1e10, 1e17])
+def test_visibility_does_not_depend_on_the_scene_scale(renderer: penumbra.Renderer, scale: float) -> None:
+    """Planes are unit normals through edge points and every distance a
+    difference of nearby points: measured at most 3e-4 off at every scale
+    here (lit_side at 1e17; 2e-5 with the defaults)."""
+    from test_pvm import scaled_scene
+
+    base = penumbra.scenes.get("sphere_on_plane", width=64, height=64)
+    for params in ({}, {"hard_term": "lit_side"}):
+        expected = renderer.render(base, "wedges", **params).visibility
+        got = renderer.render(scaled_scene(base, scale), "wedges", **params).visibility
+        np.testing.assert_allclose(got, expected, atol=2e-3)
+
+
+def thin_prism() -> penumbra.Mesh:
+    """benchmarks/wedges.py's caster: a triangle with a 23-degree tip, 0.1 thick."""
+    pts = np.array([(-1.5, -0.6), (1.5, 0.0), (-1.5, 0.6)])
+    v = np.vstack([np.c_[pts[:, 0], np.full(3, 1.9), pts[:, 1]], np.c_[pts[:, 0], np.full(3, 2.0), pts[:, 1]]])
+    f = np.array([[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [2, 0, 3], [2, 3, 5]])[:, ::-1]
+    return penumbra.Mesh(v, np.ascontiguousarray(f), object_id=1, name="prism")
+
+
+def test_extra_wedges_at_an_acute_tip_bring_it_closer_to_ground_truth(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
+    """4.1, Figure 7: measured at 96x96 (benchmarks/wedges.py has 128x128):
+    acute_wedges=6 takes the penumbra RMSE from 0.073 to 0.055 (0.76 of it)."""
+    pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
+    from penumbra import metrics
+
+    import trimesh
+
+    caster = thin_prism()
+    assert trimesh.Trimesh(caster.vertices, caster.faces, process=False).volume > 0, "outward faces"
+    light = penumbra.SphereLight((0.0, 5.0, 0.0), 0.3, intensity=40.0)
+    camera = penumbra.Camera.look_at((0.0, 6.0, 3.0), (0.3, 0.0, 0.0), fov_y=45, width=96, height=96)
+    scene = penumbra.Scene([ground_slab(half_size=4.0), caster], light, camera)
+    gt = pm.ground_truth(scene, spp=256, cache_dir=tmp_path_factory.mktemp("gt"), kinds=("visibility",)).visibility
+    region = metrics.penumbra_region(gt)
+    plain = renderer.render(scene, "wedges")
+    extra = renderer.render(scene, "wedges", acute_wedges=6)
+    assert plain.stats["extra_wedges"] == 0 < extra.stats["extra_wedges"]
+    e0 = metrics.rmse(plain.visibility, gt, region)
+    e6 = metrics.rmse(extra.visibility, gt, region)
+    assert e6 < 0.85 * e0, (e0, e6)
+
+
+# Penumbra RMSE on the real-mesh suite of tests/test_real_meshes.py (160 x
+# 160, ground truth at 1024 samples), measured on this branch; each test
+# allows it 15% and 0.005 more, as that suite does. Stray pixels: at most
+# 0.68% measured (cube close r=0.8: the corners' cone side lines), else
+# under 0.03%; bound 1%.
+WEDGES_MEASURED: dict[str, dict[str, float]] = {
+    "cube.obj close r=0.3": {"defaults": 0.0326, "falloff": 0.0261},
+    "cube.obj close r=0.8": {"defaults": 0.0823, "falloff": 0.0805},
+    "cube.obj wide_floor r=0.3": {"defaults": 0.0568, "falloff": 0.0438},
+    "spot.obj close r=0.3": {"defaults": 0.1630, "falloff": 0.1249},
+    "spot.obj close r=0.8": {"defaults": 0.2144, "falloff": 0.1615},
+    "spot.obj wide_floor r=0.3": {"defaults": 0.1764, "falloff": 0.1354},
+    "teapot-mcguire-closed.obj close r=0.3": {"defaults": 0.0811, "falloff": 0.0663},
+    "teapot-mcguire-closed.obj close r=0.8": {"defaults": 0.1498, "falloff": 0.1163},
+    "teapot-mcguire-closed.obj wide_floor r=0.3": {"defaults": 0.1139, "falloff": 0.0817},
+}
+WEDGES_CONFIGS: dict[str, dict[str, bool]] = {"defaults": {}, "falloff": {"falloff": True}}
+
+
+@pytest.mark.parametrize("config", list(WEDGES_CONFIGS))
+@pytest.mark.parametrize("name", list(WEDGES_MEASURED))
+def test_wedges_hold_their_measured_accuracy_on_real_meshes(renderer: penumbra.Renderer, truth: dict[str, np.ndarray], name: str, config: str) -> None:
+    if name not in SUITE:
+        pytest.skip("the shared meshes are absent")
+    scene = SUITE[name]
+    gt = truth_of(truth, name, scene)
+    bounds = {"rmse": 1.15 * WEDGES_MEASURED[name][config] + 0.005, "stray_percent": 1.0}
+    check_against_truth(f"{name} wedges {config}", renderer.render(scene, "wedges", **WEDGES_CONFIGS[config]), gt, bounds)
