@@ -11,7 +11,7 @@ use glam::DVec3;
 use crate::error::Result;
 use crate::occluders::Occluders;
 use crate::scene::{PreparedMesh, PreparedScene};
-use crate::topology::{Topology, NO_FACE};
+use crate::topology::{ConnectivityStats, Part, Topology, NO_FACE, WELD_TOLERANCE};
 
 /// How casters with boundary edges are treated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -218,6 +218,24 @@ pub struct SceneSilhouette {
     pub edges: Vec<SilhouetteEdge>,
     pub cache_hits: usize,
     pub hidden_edges: usize,
+    /// What connectivity found across the scene's meshes.
+    pub connectivity: ConnectivityStats,
+}
+
+impl ConnectivityStats {
+    /// The render stats that say what connectivity found (issue 27).
+    pub fn named(&self) -> [(&'static str, i64); 8] {
+        [
+            ("corners_welded", self.corners_welded as i64),
+            ("pieces_joined", self.pieces_joined as i64),
+            ("degenerate_faces_ignored", self.degenerate_faces as i64),
+            ("duplicate_faces_ignored", self.duplicate_faces as i64),
+            ("faces_rewound", self.faces_rewound as i64),
+            ("t_junction_splits", self.t_junction_splits as i64),
+            ("open_edges", self.open_edges as i64),
+            ("non_manifold_edges", self.non_manifold_edges as i64),
+        ]
+    }
 }
 
 fn mesh_key(mesh: &PreparedMesh) -> u64 {
@@ -229,65 +247,69 @@ fn mesh_key(mesh: &PreparedMesh) -> u64 {
     h.finish()
 }
 
-const CACHE_LIMIT: usize = 256;
+/// The scene's geometry: every mesh's content, in order (its connectivity is built across them).
+fn scene_key(scene: &PreparedScene) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for mesh in &scene.meshes {
+        mesh_key(mesh).hash(&mut h);
+    }
+    h.finish()
+}
 
-/// (mesh content, light centre bits, whether open edges count).
+const CACHE_LIMIT: usize = 64;
+
+/// (scene geometry, light centre bits, whether open edges count).
 type SilhouetteKey = (u64, [u64; 3], bool);
 
 /// Topology and silhouette caches, owned by the renderer and shared by the
 /// methods that need silhouettes.
 #[derive(Default)]
 pub struct SilhouetteCache {
-    /// Topology per mesh content (built once while the mesh is unchanged, 4.1.1).
+    /// Topology per scene geometry (built once while the meshes are unchanged, 4.1.1).
     topologies: Mutex<HashMap<u64, Arc<Topology>>>,
-    /// Silhouettes per (mesh, light centre), recomputed only when either moves.
+    /// Silhouettes per (scene, light centre), recomputed only when either moves.
     silhouettes: Mutex<HashMap<SilhouetteKey, Arc<Vec<SilhouetteEdge>>>>,
     /// The last scene's occluder hierarchy, by its meshes' keys.
     occluders: Mutex<Option<(Vec<u64>, Arc<Occluders>)>>,
 }
 
 impl SilhouetteCache {
-    /// Silhouette edges of every mesh, through the caches; checks manifoldness.
-    pub fn edges(&self, scene: &PreparedScene, l: DVec3, open_edges: OpenEdges) -> Result<(Vec<SilhouetteEdge>, usize)> {
+    /// Silhouette edges of the scene's surfaces, through the caches, with
+    /// whether they were cached and what connectivity found; checks
+    /// manifoldness. Connectivity is built across every mesh of the scene
+    /// ([`Topology::from_parts`] at [`WELD_TOLERANCE`]), so a surface in
+    /// pieces, doubled or as a soup gives the edges of its welded form.
+    pub fn edges(&self, scene: &PreparedScene, l: DVec3, open_edges: OpenEdges) -> Result<(Vec<SilhouetteEdge>, usize, ConnectivityStats)> {
         let boundary = open_edges == OpenEdges::Silhouette;
-        let mut all = Vec::new();
-        let mut hits = 0;
+        let key = scene_key(scene);
+        let topology = self.topology(key, scene);
+        let names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
+        topology.require_closed(&names, boundary)?;
         let light_key = l.to_array().map(f64::to_bits);
-        for (index, mesh) in scene.meshes.iter().enumerate() {
-            let key = mesh_key(mesh);
-            let cached = self.silhouettes.lock().ok().and_then(|c| c.get(&(key, light_key, boundary)).cloned());
-            let edges = match cached {
-                Some(edges) => {
-                    hits += 1;
-                    edges
-                }
-                None => {
-                    let topology = self.topology(key, mesh);
-                    topology.require_closed(&mesh.name, boundary)?;
-                    let edges = Arc::new(silhouette(&topology, l, boundary));
-                    if let Ok(mut c) = self.silhouettes.lock() {
-                        if c.len() >= CACHE_LIMIT {
-                            c.clear();
-                        }
-                        c.insert((key, light_key, boundary), edges.clone());
-                    }
-                    edges
-                }
-            };
-            // Welded indices are per mesh: offset them so loops never join across meshes.
-            let offset = (index as u32) << 24;
-            all.extend(edges.iter().map(|e| SilhouetteEdge { ia: e.ia ^ offset, ib: e.ib ^ offset, ..*e }));
+        if let Some(edges) = self.silhouettes.lock().ok().and_then(|c| c.get(&(key, light_key, boundary)).cloned()) {
+            return Ok(((*edges).clone(), 1, topology.stats));
         }
-        Ok((all, hits))
+        let edges = Arc::new(silhouette(&topology, l, boundary));
+        if let Ok(mut c) = self.silhouettes.lock() {
+            if c.len() >= CACHE_LIMIT {
+                c.clear();
+            }
+            c.insert((key, light_key, boundary), edges.clone());
+        }
+        Ok(((*edges).clone(), 0, topology.stats))
     }
 
-    /// Silhouette edges of every mesh (`edges`) less those hidden from the
-    /// light's centre by any geometry of the scene (`visible_from_light`).
-    pub fn seen_from_light(&self, scene: &PreparedScene, l: DVec3, open_edges: OpenEdges) -> Result<SceneSilhouette> {
-        let (edges, cache_hits) = self.edges(scene, l, open_edges)?;
+    /// Silhouette edges of the scene (`edges`), less those hidden from the
+    /// light's centre by any geometry of the scene when `hidden` is set
+    /// (`visible_from_light`).
+    pub fn seen_from_light(&self, scene: &PreparedScene, l: DVec3, open_edges: OpenEdges, hidden: bool) -> Result<SceneSilhouette> {
+        let (edges, cache_hits, connectivity) = self.edges(scene, l, open_edges)?;
+        if !hidden {
+            return Ok(SceneSilhouette { edges, cache_hits, hidden_edges: 0, connectivity });
+        }
         let occluders = self.occluders(scene);
         let (edges, hidden_edges) = visible_from_light(&edges, &occluders, l);
-        Ok(SceneSilhouette { edges, cache_hits, hidden_edges })
+        Ok(SceneSilhouette { edges, cache_hits, hidden_edges, connectivity })
     }
 
     fn occluders(&self, scene: &PreparedScene) -> Arc<Occluders> {
@@ -304,11 +326,12 @@ impl SilhouetteCache {
         occ
     }
 
-    fn topology(&self, key: u64, mesh: &PreparedMesh) -> Arc<Topology> {
+    fn topology(&self, key: u64, scene: &PreparedScene) -> Arc<Topology> {
         if let Some(t) = self.topologies.lock().ok().and_then(|c| c.get(&key).cloned()) {
             return t;
         }
-        let t = Arc::new(Topology::build(&mesh.vertices, &mesh.faces));
+        let parts: Vec<Part<'_>> = scene.meshes.iter().map(|m| Part { vertices: &m.vertices, faces: &m.faces }).collect();
+        let t = Arc::new(Topology::from_parts(&parts, WELD_TOLERANCE));
         if let Ok(mut c) = self.topologies.lock() {
             if c.len() >= CACHE_LIMIT {
                 c.clear();

@@ -49,6 +49,8 @@ pub struct VolumeStats {
     /// Silhouette edges hidden from the light's centre (no volume; counted
     /// in `silhouette_edges`).
     pub hidden_edges: usize,
+    /// What connectivity found across the scene's meshes (issue 27).
+    pub connectivity: crate::topology::ConnectivityStats,
     /// Quadrilateral corners whose neighbouring planes meet outside the
     /// vertex's light cone (`in_light_cone`): kept as the paper has them
     /// without repair "cone", each edge's own plane with it.

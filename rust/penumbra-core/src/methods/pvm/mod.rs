@@ -31,7 +31,6 @@ use crate::passes::screen::ScreenPass;
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 use crate::passes::volumes::VolumePass;
-use crate::silhouettes::SceneSilhouette;
 pub use crate::silhouettes::{silhouette, OpenEdges, Repairs, SilhouetteCache, SilhouetteEdge};
 
 pub mod geometry;
@@ -224,6 +223,9 @@ impl Method for PenumbraVolumeMaps {
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
         frame.stat("hidden_silhouette_edges", s.hidden_edges as i64);
+        for (name, value) in s.connectivity.named() {
+            frame.stat(name, value);
+        }
         frame.stat("extrusions_outside_light_cone", s.extrusions_outside_cone as i64);
         frame.stat("silhouette_cache_hits", if fresh { volumes.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counter, &["pixels_in_volume"]);
@@ -251,17 +253,13 @@ impl PenumbraVolumeMaps {
             let (mut cache_hits, mut geometry) = (0, VolumeGeometry::default());
             // A point light has no penumbra: skip the volumes entirely.
             if r > 0.0 {
-                let silhouette = if params.repairs.hidden {
-                    ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges)?
-                } else {
-                    let (edges, cache_hits) = ctx.shared.silhouettes.edges(ctx.prepared, l, params.open_edges)?;
-                    SceneSilhouette { edges, cache_hits, hidden_edges: 0 }
-                };
+                let silhouette = ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
                 cache_hits = silhouette.cache_hits;
                 // Beyond the far plane of every face (at most sqrt(3) far from the light).
                 let reach = 4.0 * projection.far() as f64 + 4.0 * r;
                 geometry = penumbra_volumes(&silhouette.edges, l, r, reach, params.repairs.cone);
                 geometry.stats.hidden_edges = silhouette.hidden_edges;
+                geometry.stats.connectivity = silhouette.connectivity;
                 geometry.stats.silhouette_edges += silhouette.hidden_edges;
             }
             // A storage binding may not be empty: one zeroed entry stands for no edges.

@@ -39,6 +39,8 @@ pub struct MaskStats {
     /// Silhouette edges hidden from the light's centre (no volume; counted
     /// in `silhouette_edges`).
     pub hidden_edges: usize,
+    /// What connectivity found across the scene's meshes (issue 27).
+    pub connectivity: crate::topology::ConnectivityStats,
 }
 
 /// The overestimated volume of one silhouette edge `a -> b` (5.1), as its

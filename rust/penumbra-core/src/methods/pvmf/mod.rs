@@ -37,7 +37,7 @@ use crate::passes::shading::VISIBILITY_FORMAT;
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 use crate::passes::volumes::VolumePass;
-use crate::silhouettes::{OpenEdges, Repairs, SceneSilhouette};
+use crate::silhouettes::{OpenEdges, Repairs};
 
 pub mod geometry;
 pub use geometry::{mask_volumes, MaskStats, MaskVertex, Offsets};
@@ -345,6 +345,9 @@ impl Method for PenumbraVolumeMaskFiltering {
         frame.stat("mask_quads", s.mask_quads as i64);
         frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
         frame.stat("hidden_silhouette_edges", s.hidden_edges as i64);
+        for (name, value) in s.connectivity.named() {
+            frame.stat(name, value);
+        }
         frame.stat("silhouette_cache_hits", if fresh_mask { mask.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counters, &COUNTERS);
         frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth, projection.far()));
@@ -369,17 +372,13 @@ impl PenumbraVolumeMaskFiltering {
             let (mut stats, mut cache_hits, mut vertices) = (MaskStats::default(), 0, Vec::new());
             // A point light has no penumbra: no volumes, and nothing is filtered.
             if r > 0.0 {
-                let silhouette = if params.repairs.hidden {
-                    ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges)?
-                } else {
-                    let (edges, cache_hits) = ctx.shared.silhouettes.edges(ctx.prepared, l, params.open_edges)?;
-                    SceneSilhouette { edges, cache_hits, hidden_edges: 0 }
-                };
+                let silhouette = ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
                 cache_hits = silhouette.cache_hits;
                 // Beyond the far plane from any moved point (they lie between l and the edges).
                 let reach = 4.0 * projection.far() as f64 + 4.0 * r;
                 (vertices, stats) = mask_volumes(&silhouette.edges, l, r, params.s_e, params.offsets, reach, params.repairs.distance);
                 stats.hidden_edges = silhouette.hidden_edges;
+                stats.connectivity = silhouette.connectivity;
                 stats.silhouette_edges += silhouette.hidden_edges;
             }
             // The moved points lie between the light and the edges, nearer than

@@ -59,6 +59,8 @@ pub struct WedgeStats {
     pub side_fallbacks: usize,
     /// Silhouette edges hidden from the light's centre (no wedge).
     pub hidden_edges: usize,
+    /// What connectivity found across the scene's meshes (issue 27).
+    pub connectivity: crate::topology::ConnectivityStats,
     /// (wedge, tile) pairs in the binning.
     pub binned: usize,
 }

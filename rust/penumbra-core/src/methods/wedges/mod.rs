@@ -37,7 +37,7 @@ use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
-use crate::silhouettes::{OpenEdges, Repairs, SceneSilhouette};
+use crate::silhouettes::{OpenEdges, Repairs};
 
 pub mod geometry;
 pub use geometry::{bin_wedges, penumbra_wedges, wedge_intensity, Bins, WedgeGpu, WedgeStats, Wedges, TILE};
@@ -227,6 +227,9 @@ impl Method for PenumbraWedges {
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
         frame.stat("hidden_silhouette_edges", s.hidden_edges as i64);
+        for (name, value) in s.connectivity.named() {
+            frame.stat(name, value);
+        }
         frame.stat("side_line_fallbacks", s.side_fallbacks as i64);
         frame.stat("binned_wedge_tiles", s.binned as i64);
         frame.stat("silhouette_cache_hits", if fresh { wedges.silhouette_cache_hits as i64 } else { 0 });
@@ -246,15 +249,11 @@ impl PenumbraWedges {
             let mut cache_hits = 0;
             // A point light has no penumbra: no wedges, the hard shadow alone.
             if r > 0.0 {
-                let silhouette = if params.repairs.hidden {
-                    ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges)?
-                } else {
-                    let (edges, cache_hits) = ctx.shared.silhouettes.edges(ctx.prepared, l, params.open_edges)?;
-                    SceneSilhouette { edges, cache_hits, hidden_edges: 0 }
-                };
+                let silhouette = ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
                 cache_hits = silhouette.cache_hits;
                 built = penumbra_wedges(&silhouette.edges, l, r, params.acute_wedges, params.repairs.cone);
                 built.stats.hidden_edges = silhouette.hidden_edges;
+                built.stats.connectivity = silhouette.connectivity;
                 built.stats.silhouette_edges += silhouette.hidden_edges;
             }
             let camera = ctx.camera;
