@@ -1,0 +1,260 @@
+"""One surface, one shadow (SPEC section 3, issue 27): every method gives the
+same shadow when a closed mesh arrives as a triangle soup with rounding, in
+pieces, doubled, with reversed windings or with slivers, and when the whole
+scene is mirrored or moved far away.
+
+Each case renders the welded mesh on the ground slab and the same mesh in
+one form (`penumbra.forms`) and holds the fraction of ground pixels whose
+visibility moves by more than 0.1 to at most 0.2%. A failing case leaves the
+two images and their difference under test-artifacts/invariance/.
+
+The default run takes every closed mesh of ../shared/meshes and its corpus
+with the silhouette methods (`pvm`, `pvmf`, `wedges`: they build
+connectivity) and two meshes with every other method; `-m slow` runs every
+method on every mesh. The cloud of separate tiny triangles, which has no
+welded form, is held against `reference` at 1024 samples.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra import forms, scenes
+from stress_scenes import MESHES, METHODS, VOLUME_METHODS
+from test_real_meshes import leave_images
+
+ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts" / "invariance"
+CORPUS = MESHES / "corpus"
+# The closed 2-manifolds of ../shared/meshes and its corpus (their SOURCES.md).
+CLOSED = [MESHES / m for m in scenes.CLOSED_MESHES] + [
+    CORPUS / m
+    for m in (
+        "koala_low_resolution.obj",
+        "penguin.obj",
+        "fish_low_resolution.obj",
+        "cat-low-resolution.obj",
+        "torus.obj",
+        "boot.obj",
+        "mushroom.obj",
+        "cow-low-resolution.obj",
+    )
+]
+EVERY_METHOD_MESHES = ("spot.obj",)
+SIZE = 96
+LIGHT_RADIUS = 0.45
+BOUND = 0.002  # the issue's: at most 0.2% of ground pixels move by more than 0.1
+# Cases that miss the bound, held to what they measure. The boot's soup
+# (seed 0) moves its corners by up to 1e-6 of its size; the weld joins them
+# back exactly, but the moved corners flip faces that are edge-on to the
+# light, the silhouette gains 2 junction vertices, and `wedges` draws a
+# 24-pixel streak from there to the image's edge (visibility off by up to
+# 0.95). Other soups (seeds 1, 2) and the welded boot with the same jitter
+# (seeds 0-3) move nothing: wedges is what breaks, on a jagged outline that
+# a tiny perturbation changes (issue 28).
+KNOWN: dict[tuple[str, str, str], float] = {("boot.obj", "wedges", "soup"): 0.0045}
+# Invariance compares a method with itself: fewer light samples suffice,
+# except under a mirror. The light's samples lie in a frame that a mirror
+# does not carry (a right-handed frame stays right-handed), so the mirrored
+# scene is sampled at other points of the light: at 16 samples that noise
+# moves 0.26-0.30% of spot's ground pixels by more than 0.1 (reference,
+# raytraced), at 256 none.
+PARAMS: dict[str, dict[str, Any]] = {"reference": {"n_samples": 16}, "raytraced": {"n_samples": 16}, "triangle_masks": {"n_samples": 16}}
+MIRRORED_SAMPLES = 256
+
+
+def _cases() -> list[Any]:
+    out = []
+    for path in CLOSED:
+        for method in METHODS:
+            slow = method not in VOLUME_METHODS and path.name not in EVERY_METHOD_MESHES
+            out.append(pytest.param(path, method, marks=[pytest.mark.slow] if slow else [], id=f"{path.name}-{method}"))
+    return out
+
+
+@pytest.fixture(scope="module")
+def renderer() -> penumbra.Renderer:
+    if not MESHES.is_dir():
+        pytest.skip(f"the shared meshes are not at {MESHES.resolve()}")
+    return penumbra.Renderer()
+
+
+def _forms(path: Path) -> tuple[penumbra.Scene, dict[str, penumbra.Scene]]:
+    base = scenes.from_mesh(str(path), width=SIZE, height=SIZE, light_radius=LIGHT_RADIUS)
+    mesh = base.meshes[1]
+    return base, {
+        "soup": forms.replace_mesh(base, 1, forms.soup(mesh)),
+        "split": forms.replace_mesh(base, 1, forms.split(mesh)),
+        "doubled": forms.replace_mesh(base, 1, forms.doubled(mesh)),
+        "reversed": forms.replace_mesh(base, 1, forms.reversed_windings(mesh)),
+        "slivers": forms.replace_mesh(base, 1, forms.with_slivers(mesh)),
+        "mirrored": forms.mirrored(base),
+        "translated": forms.translated(base, (40.0, 7.0, -30.0)),
+    }
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize(("path", "method"), _cases())
+def test_every_form_of_a_closed_mesh_casts_the_welded_shadow(renderer: penumbra.Renderer, path: Path, method: str) -> None:
+    if not path.exists():
+        pytest.skip(f"{path} is absent")
+    base, cases = _forms(path)
+    params = PARAMS.get(method, {})
+    try:
+        welded = renderer.render(base, method, **params)
+    except penumbra.GpuFeatureError as e:
+        pytest.skip(str(e))
+    ground = welded.object_id == 0
+    moved = {}
+    for form, scene in cases.items():
+        reference = welded
+        if form == "mirrored" and "n_samples" in params:
+            params = {**params, "n_samples": MIRRORED_SAMPLES}
+            reference = renderer.render(base, method, **params)
+        v = renderer.render(scene, method, **params).visibility
+        if form == "mirrored":
+            v = np.fliplr(v)
+        moved[form] = forms.moved_fraction(reference.visibility, v, ground)
+        if moved[form] > KNOWN.get((path.name, method, form), BOUND):
+            folder = leave_images(f"{path.name}-{method}-{form}", v, welded.visibility, ARTIFACTS)
+            pytest.fail(f"{path.name}, {method}, {form}: {100 * moved[form]:.2f}% of ground pixels moved by more than 0.1 (bound {100 * BOUND}%); images in {folder}")
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("method", sorted(VOLUME_METHODS))
+def test_connectivity_stats_say_what_was_welded(renderer: penumbra.Renderer, method: str) -> None:
+    path = MESHES / "spot.obj"
+    base, cases = _forms(path)
+    welded = renderer.render(base, method).stats
+    soup = renderer.render(cases["soup"], method).stats
+    faces = len(base.meshes[1].faces)
+    # The soup's 3 corners per face weld back into the mesh's vertices.
+    assert soup["corners_welded"] - welded["corners_welded"] == 3 * faces - len(base.meshes[1].vertices)
+    assert soup["open_edges"] == welded["open_edges"] == 0
+    split = renderer.render(cases["split"], method).stats
+    assert split["pieces_joined"] == 2 and split["open_edges"] == 0
+    doubled = renderer.render(cases["doubled"], method).stats
+    assert doubled["duplicate_faces_ignored"] == faces
+    slivers = renderer.render(cases["slivers"], method).stats
+    assert slivers["degenerate_faces_ignored"] == 40 and slivers["non_manifold_edges"] == 0
+    assert soup["silhouette_edges"] == welded["silhouette_edges"]
+
+
+@pytest.mark.gpu
+def test_a_split_mesh_is_closed_for_open_edges_error(renderer: penumbra.Renderer) -> None:
+    # Each piece alone is open; across the scene's meshes the surface is closed.
+    base, cases = _forms(MESHES / "spot.obj")
+    for method in sorted(VOLUME_METHODS):
+        renderer.render(cases["split"], method, open_edges="error")
+        renderer.render(cases["soup"], method, open_edges="error")
+    lid = penumbra.Mesh(base.meshes[1].vertices, base.meshes[1].faces[:-4], name="lid")
+    with pytest.raises(penumbra.MeshError, match="'lid'.*not closed"):
+        renderer.render(forms.replace_mesh(base, 1, lid), "pvm", open_edges="error")
+
+
+def test_weld_tolerance_is_below_every_real_feature() -> None:
+    """The measurement behind topology.rs's WELD_TOLERANCE (1e-5 of a mesh's
+    diagonal): every shared and corpus mesh's shortest edge and smallest
+    altitude (faces with area) lie well above it; `pytest -s` prints them."""
+    if not MESHES.is_dir():
+        pytest.skip(f"the shared meshes are not at {MESHES.resolve()}")
+    tolerance = 1e-5
+    paths = sorted([*MESHES.glob("*.obj"), *MESHES.glob("*.ply"), *CORPUS.glob("*.obj")])
+    for path in paths:
+        m = scenes.load_mesh(str(path))
+        v, f = np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces)
+        diagonal = float(np.linalg.norm(np.ptp(v, axis=0)))
+        edges = np.linalg.norm(v[f[:, [1, 2, 0]]] - v[f], axis=2)
+        area2 = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+        altitude = area2 / np.maximum(edges.max(axis=1), 1e-300)
+        shortest = float(edges[edges > 0].min()) / diagonal
+        thinnest = float(altitude[altitude > tolerance * diagonal].min()) / diagonal if (altitude > tolerance * diagonal).any() else float("nan")
+        slivers = int((altitude <= tolerance * diagonal).sum())
+        print(f"{path.name}: shortest edge {shortest:.2e}, smallest altitude {thinnest:.2e} of the diagonal; {slivers} faces within the tolerance")
+        assert shortest > 10 * tolerance, f"{path.name}: an edge of {shortest:.2e} of the diagonal would be welded shut"
+        # Sponza's 17 slivers (6 of zero area) are the only faces within it.
+        assert slivers <= (17 if path.name == "sponza.obj" else 0), f"{path.name}: {slivers} faces thinner than the tolerance"
+
+
+@pytest.mark.gpu
+def test_a_real_stl_soup_casts_the_welded_shadow(renderer: penumbra.Renderer, tmp_path: Path) -> None:
+    """An STL file is a soup of float32 corners: read as it is (no merging),
+    and through --mesh / from_mesh, it casts the OBJ's shadow."""
+    import trimesh
+
+    path = MESHES / "spot.obj"
+    base = scenes.from_mesh(str(path), width=SIZE, height=SIZE, light_radius=LIGHT_RADIUS)
+    stl = tmp_path / "spot.stl"
+    trimesh.Trimesh(base.meshes[1].vertices, base.meshes[1].faces, process=False).export(stl)
+    raw = trimesh.load(stl, process=False)
+    assert len(raw.vertices) == 3 * len(raw.faces), "the STL holds a soup"
+    soup_scene = forms.replace_mesh(base, 1, penumbra.Mesh.from_trimesh(raw, albedo=0.7, object_id=1))
+    from_file = scenes.from_mesh(str(stl), width=SIZE, height=SIZE, light_radius=LIGHT_RADIUS)
+    for method in sorted(VOLUME_METHODS):
+        welded = renderer.render(base, method)
+        ground = welded.object_id == 0
+        for scene in (soup_scene, from_file):
+            moved = forms.moved_fraction(welded.visibility, renderer.render(scene, method).visibility, ground)
+            assert moved <= BOUND, f"{method}: {100 * moved:.2f}% of ground pixels moved"
+
+
+def leaves(count: int = 1000, size: float = 0.06, seed: int = 0) -> penumbra.Mesh:
+    """``count`` separate tiny triangles (about ``size`` across) scattered in a
+    1.6 x 1 x 1.6 box above the floor: foliage, particles, debris. A soup
+    with no welded form: every triangle is its own open surface."""
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform([-0.8, 0.6, -0.8], [0.8, 1.6, 0.8], size=(count, 3))
+    corners = centres[:, None, :] + rng.normal(size=(count, 3, 3)) * size / 2
+    return penumbra.Mesh(corners.reshape(-1, 3), np.arange(3 * count).reshape(-1, 3), albedo=0.6, object_id=1, name="leaves")
+
+
+# Fraction of ground pixels off `reference` at 1024 samples by more than 0.1,
+# measured at 64x64 (every method's defaults): the bounds below are these
+# with room for the 256-sample truth's noise (raytraced and reference-256
+# itself: 0.0%). pvm and pvmf build 3 silhouette edges per leaf (3004 in
+# all, each leaf's outline) and land where hard shadows with soft edges
+# land: they cannot see the light between leaves.
+CLOUD_MEASURED = {"hard": 6.03, "pcf": 5.27, "pcss": 1.04, "adaptive": 4.27, "pvm": 4.23, "pvmf": 3.55, "backprojection": 0.96, "raytraced": 0.0, "reference": 0.0}
+CLOUD_FAILING = {"wedges": 99.4}
+
+
+def _cloud_methods() -> list[Any]:
+    reason = (
+        "{}% of ground pixels off the truth by more than 0.1 (the floor goes dark): where casters overlap as the "
+        "light sees them, penumbra wedges subtract every wedge's light (AAM 8, 'not always correct'), and a thousand "
+        "overlapping leaves subtract it many times over (issue 28)"
+    )
+    return [
+        pytest.param(m, marks=[pytest.mark.xfail(strict=True, reason=reason.format(CLOUD_FAILING[m]))] if m in CLOUD_FAILING else [], id=m)
+        for m in METHODS
+    ]
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("method", _cloud_methods())
+def test_a_cloud_of_separate_tiny_triangles_against_reference(renderer: penumbra.Renderer, method: str, cloud_truth: tuple[penumbra.Scene, np.ndarray, np.ndarray]) -> None:
+    scene, truth, ground = cloud_truth
+    try:
+        result = renderer.render(scene, method, **({"n_samples": 64} if method in ("raytraced", "triangle_masks") else {}))
+    except penumbra.GpuFeatureError as e:
+        pytest.skip(str(e))
+    off = 100 * forms.moved_fraction(truth, result.visibility, ground)
+    bound = CLOUD_MEASURED.get(method, 1.0) * 1.25 + 0.5
+    if off > bound:
+        folder = leave_images(f"leaves-{method}", result.visibility, truth, ARTIFACTS)
+        pytest.fail(f"{method}: {off:.2f}% of ground pixels off reference by more than 0.1 (bound {bound:.2f}%); images in {folder}")
+    if "silhouette_edges" in result.stats:
+        # Bounded cost: no more silhouette edges than the leaves' own outlines.
+        assert result.stats["silhouette_edges"] <= 3 * 1000 + 8
+
+
+@pytest.fixture(scope="module")
+def cloud_truth(renderer: penumbra.Renderer) -> tuple[penumbra.Scene, np.ndarray, np.ndarray]:
+    base = scenes.get("sphere_on_plane", width=64, height=64)
+    scene = penumbra.Scene([base.meshes[0], leaves()], base.light.with_radius(LIGHT_RADIUS), base.camera, name="leaves")
+    truth = renderer.render(scene, "reference", n_samples=256)
+    return scene, truth.visibility, truth.object_id == 0
