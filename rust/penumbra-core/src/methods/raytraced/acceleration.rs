@@ -228,7 +228,7 @@ impl AccelerationCache {
                 buffer
             };
             let vertices = input("vertices", bytemuck::cast_slice(&mesh.vertices));
-            let indices = input("indices", bytemuck::cast_slice(&mesh.faces));
+            let indices = input("indices", bytemuck::cast_slice(&spatial_order(&mesh.vertices, &mesh.faces)));
             fresh.push((key, blas, size, vertices, indices, label, mesh.faces.len() as u64));
         }
 
@@ -341,6 +341,55 @@ impl AccelerationCache {
     }
 }
 
+/// The faces in Morton order of their centroids (10 bits per axis over the
+/// mesh's bounding box). Lavapipe's BLAS builder keeps the order it is given
+/// (measured on spot.obj, 5856 triangles, 128x128, 16 rays per pixel: 267 ms
+/// for the faces as the file has them, 4845 ms for the same faces shuffled,
+/// 335 ms shuffled then sorted into a grid), so a soup or an exporter's
+/// arbitrary face order made `raytraced` 11-18x slower; sorted, every order
+/// traces alike. Visibility does not depend on the order (no shader reads a
+/// primitive index).
+pub fn spatial_order(vertices: &[[f32; 3]], faces: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let centroid = |f: &[u32; 3]| {
+        let mut c = [0.0f64; 3];
+        for &i in f {
+            for (k, x) in vertices[i as usize].iter().enumerate() {
+                c[k] += f64::from(*x) / 3.0;
+            }
+        }
+        c
+    };
+    let centroids: Vec<[f64; 3]> = faces.iter().map(centroid).collect();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for c in &centroids {
+        for k in 0..3 {
+            lo[k] = lo[k].min(c[k]);
+            hi[k] = hi[k].max(c[k]);
+        }
+    }
+    // Spreads the low 10 bits of x to every third bit.
+    let spread = |x: u32| {
+        let mut x = x & 0x3ff;
+        x = (x | (x << 16)) & 0x0300_00ff;
+        x = (x | (x << 8)) & 0x0300_f00f;
+        x = (x | (x << 4)) & 0x030c_30c3;
+        (x | (x << 2)) & 0x0924_9249
+    };
+    let code = |c: &[f64; 3]| {
+        let mut m = 0u32;
+        for k in 0..3 {
+            // A flat box (extent 0 on an axis) puts every centroid in cell 0 there.
+            let extent = hi[k] - lo[k];
+            let cell = if extent > 0.0 { ((c[k] - lo[k]) / extent * 1023.0).round() as u32 } else { 0 };
+            m |= spread(cell) << k;
+        }
+        m
+    };
+    let mut order: Vec<(u32, u32)> = centroids.iter().enumerate().map(|(i, c)| (code(c), i as u32)).collect();
+    order.sort_unstable();
+    order.into_iter().map(|(_, i)| faces[i as usize]).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -398,5 +447,16 @@ mod tests {
         let t = Mat4::from_translation(glam::Vec3::new(1.0, 2.0, 3.0)) * Mat4::from_scale(glam::Vec3::new(2.0, 3.0, 4.0));
         let m = mesh(vec![[0.0; 3]; 3], t);
         assert_eq!(instance_transform(&m), [2.0, 0.0, 0.0, 1.0, 0.0, 3.0, 0.0, 2.0, 0.0, 0.0, 4.0, 3.0]);
+    }
+
+    #[test]
+    fn spatial_order_keeps_every_face_and_sorts_by_position() {
+        // A row of 16 triangles along x, given in reverse: sorted, they run left to right.
+        let vertices: Vec<[f32; 3]> = (0..16).flat_map(|i| [[i as f32, 0.0, 0.0], [i as f32 + 0.5, 1.0, 0.0], [i as f32, 1.0, 0.5]]).collect();
+        let faces: Vec<[u32; 3]> = (0..16u32).rev().map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let sorted = spatial_order(&vertices, &faces);
+        assert_eq!(sorted, (0..16u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect::<Vec<_>>());
+        // A flat or single-face mesh stays whole.
+        assert_eq!(spatial_order(&vertices, &faces[..1]), faces[..1].to_vec());
     }
 }
