@@ -245,7 +245,8 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("pvm_open_edges_unknown", render(method="pvm", open_edges="ignore"), ParameterError, ["open_edges", "silhouette"]),
     # Open and non-manifold casters render by default (docs/real_meshes.md); open_edges="error" refuses them.
     ("pvm_open_caster", render(method="pvm", open_edges="error"), MeshError, ["'quad'", "not closed", "open_edges='silhouette'"]),
-    ("pvm_non_manifold_caster", render([closed_box(), quad(faces=np.vstack([QUAD_F, QUAD_F]))], method="pvm", open_edges="error"), MeshError, ["'quad'", "not a 2-manifold", "open_edges='silhouette'"]),
+    # Three faces on the quad's diagonal (a doubled face would be one face, issue 27).
+    ("pvm_non_manifold_caster", render([closed_box(), quad(vertices=np.vstack([QUAD_V, [[0.0, 1.5, 0.9]]]), faces=np.vstack([QUAD_F, [[0, 2, 4]]]))], method="pvm", open_edges="error"), MeshError, ["'quad'", "not a 2-manifold", "open_edges='silhouette'"]),
     ("pvmf_open_caster", render(method="pvmf", open_edges="error"), MeshError, ["not closed"]),
     ("result_unknown_image", lambda r: render()(r).save("x.png", image="albedo"), ParameterError, ["albedo"]),
     ("write_into_missing_folder", lambda r: penumbra.write_image("no/such/dir/out.png", np.zeros((2, 2), np.float32)), penumbra.PenumbraIOError, ["no/such/dir/out.png"]),

@@ -150,7 +150,7 @@ def test_open_and_non_manifold_casters_get_pvms_decision(renderer: penumbra.Rend
         assert renderer.render(s, "wedges").stats["silhouette_edges"] == renderer.render(s, "pvm").stats["silhouette_edges"]
     with pytest.raises(penumbra.MeshError, match=r"mesh 'finned'.*not a 2-manifold"):
         renderer.render(finned, "wedges", open_edges="error")
-    # A duplicated face lies where its twin does: the same shadow.
+    # The fin lies inside the box, its open edges hidden from the light's centre: the same shadow.
     np.testing.assert_array_equal(renderer.render(finned, "wedges").visibility, renderer.render(clean, "wedges").visibility)
 
     open_scene = penumbra.Scene([ground_plane(), sphere((0.0, 1.6, 0.0), 1.0)], base.light, base.camera)
