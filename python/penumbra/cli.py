@@ -56,6 +56,9 @@ def _adapter(info: dict[str, Any]) -> str:
 def _render(args: argparse.Namespace) -> int:
     from penumbra.comparison import timed_render, timing_renderer
 
+    from penumbra.render import image_extension
+
+    image_extension(args.output)  # refused before the render, not after
     scene = _scene(args)
     params = dict(_param(p) for p in args.param)
     if args.repeats < 0:
