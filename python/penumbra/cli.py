@@ -104,10 +104,10 @@ def _compare(args: argparse.Namespace) -> int:
           f"{' (cached)' if all(gt.cached.values()) else ''}")
     print(f"times: {c.clock}; hard {c.baseline.warm_ms:.1f} ms")
     print(f"parameters: {json.dumps(params) if params else 'each method defaults'}")
+    for note in c.notes:
+        print(f"note: {note}")
     print()
     print(c.table())
-    for method, reason in c.skipped.items():
-        print(f"skipped {method}: {reason}")
     if len(c.rows) == 1:
         print()
         print(summary(c.rows[0].metrics))
