@@ -125,3 +125,23 @@ def test_raytraced_left_out_with_its_reason_and_table_lists_skipped_methods(rend
         compare_methods(s, ["raytraced"], params={"n_samples": 32768}, truth="raytraced", spp=16, repeats=1, renderer=renderer)
     with pytest.raises(penumbra.ParameterError, match=re.escape(reason)):
         penumbra.compare(s, "raytraced", truth="raytraced", n_samples=32768, renderer=renderer)
+
+
+def test_adaptive_guard_counts_the_cube_faces_projection_auto_fits(renderer: penumbra.Renderer) -> None:
+    """With projection 'auto' the parameters alone count one face a map (4
+    maps of 8192^2: 1 GiB, let through); the light just above a wide slab
+    makes every map a cube map, and the maps fitted, 24 faces, are refused
+    before they are allocated."""
+    from penumbra.scenes import ground_slab
+
+    camera = penumbra.Camera(eye=(0, 4, 6), target=(0, 0, 0), width=SIZE, height=SIZE)
+    s = penumbra.Scene([ground_slab()], penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), camera)
+    assert renderer.render(s, "adaptive", max_depth=0, map_size=64).stats["cube_maps"] == 4
+    with pytest.raises(penumbra.ParameterError) as raised:
+        renderer.render(s, "adaptive", max_depth=0, map_size=8192)
+    assert str(raised.value) == (
+        "adaptive: max_depth 0 with map_size 8192 and projection 'auto' would hold at level 0 4 maps of 24 faces in all "
+        "(256.00 MiB a face), 6.00 GiB, more than the 2 GiB allowed; try a smaller map_size, "
+        "projection='frustum' (one face per map where a cube map has six)"
+    )
+    assert renderer.pool_stats()["bytes_in_use"] < 1 << 20, "no map was allocated"
