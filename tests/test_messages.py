@@ -145,3 +145,9 @@ def test_adaptive_guard_counts_the_cube_faces_projection_auto_fits(renderer: pen
         "projection='frustum' (one face per map where a cube map has six)"
     )
     assert renderer.pool_stats()["bytes_in_use"] < 1 << 20, "no map was allocated"
+
+
+def test_a_sweeps_failure_names_its_configuration_in_process(renderer: penumbra.Renderer) -> None:
+    with pytest.raises(penumbra.ParameterError, match=r"got int 8; in sweep configuration 1 \(scene 'scene', method 'hard', map_size=8\) on .+ pid \d+$") as raised:
+        penumbra.sweep(scene(), "hard", {"map_size": [64, 8]}, renderer=renderer, progress=False)
+    assert raised.value.sweep_config == {"config": 1, "scene": "scene", "method": "hard", "params": {"map_size": 8}}
