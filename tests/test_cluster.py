@@ -82,7 +82,7 @@ def test_dask_sweep_matches_in_process(client: Any, renderer: penumbra.Renderer,
         assert "12/12" in capsys.readouterr().err, "the bar advances as chunks come back"
         assert (there["worker_pid"] != os.getpid()).all()
         assert there["worker_pid"].nunique() <= 2
-        pd.testing.assert_frame_equal(fixed_columns(there), fixed_columns(here))
+        pd.testing.assert_frame_equal(fixed_columns(there), fixed_columns(here), check_exact=True)
         for a, b, row in zip(here["images"], there["images"], here.itertuples()):
             assert np.array_equal(a["visibility"], b["visibility"]), f"configuration {row.config} differs"
         # Contiguous chunks (3 configurations each) on one renderer per worker:
