@@ -137,6 +137,7 @@ def test_adaptive_guard_counts_the_cube_faces_projection_auto_fits(renderer: pen
     camera = penumbra.Camera(eye=(0, 4, 6), target=(0, 0, 0), width=SIZE, height=SIZE)
     s = penumbra.Scene([ground_slab()], penumbra.SphereLight((0, 1.4, 0), 0.3, intensity=10), camera)
     assert renderer.render(s, "adaptive", max_depth=0, map_size=64).stats["cube_maps"] == 4
+    held = renderer.pool_stats()["bytes_in_use"]  # the pass cache's entries, from this and earlier tests
     with pytest.raises(penumbra.ParameterError) as raised:
         renderer.render(s, "adaptive", max_depth=0, map_size=8192)
     assert str(raised.value) == (
@@ -144,7 +145,7 @@ def test_adaptive_guard_counts_the_cube_faces_projection_auto_fits(renderer: pen
         "(256.00 MiB a face), 6.00 GiB, more than the 2 GiB allowed; try a smaller map_size, "
         "projection='frustum' (one face per map where a cube map has six)"
     )
-    assert renderer.pool_stats()["bytes_in_use"] < 1 << 20, "no map was allocated"
+    assert renderer.pool_stats()["bytes_in_use"] == held, "no map was allocated or kept"
 
 
 def test_a_sweeps_failure_names_its_configuration_in_process(renderer: penumbra.Renderer) -> None:
