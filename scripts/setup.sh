@@ -2,7 +2,8 @@
 # Sets Penumbra up on a Debian or Ubuntu machine: the Vulkan loader and Mesa's
 # software Vulkan driver (lavapipe) and LLVM 19 (for Mitsuba) when absent, a lavapipe with ray
 # queries where the system's Mesa is older than 24.1 (Debian 12: from bookworm-backports), then the
-# package itself (built by maturin, editable) with its test dependencies. Needs cargo (rustup).
+# package itself (built by maturin, editable) with its test dependencies and Dask (the `cluster`
+# extra: tests/test_cluster.py). Needs cargo (rustup).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -44,4 +45,4 @@ fi
 command -v cargo >/dev/null || { echo "setup: cargo not found; install Rust with rustup first" >&2; exit 1; }
 
 python3 -m pip install -q --disable-pip-version-check "maturin==1.16.0"
-python3 -m pip install -q --disable-pip-version-check -e ".[test]"
+python3 -m pip install -q --disable-pip-version-check -e ".[test,cluster]"

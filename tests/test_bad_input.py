@@ -188,7 +188,7 @@ CASES: list[tuple[str, Callable[..., Any], type[Exception], list[str]]] = [
     ("param_unsupported_type", render(map_size=[1, 2]), ParameterError, ["map_size", "unsupported type"]),
     ("timing_mode", lambda r: penumbra.Renderer(timing="sometimes"), ParameterError, ["timing"]),
     # Outputs
-    ("image_extension", lambda r: penumbra.write_image("out.bmp", np.zeros((2, 2), np.float32)), ParameterError, [".png or .exr"]),
+    ("image_extension", lambda r: penumbra.write_image("out.bmp", np.zeros((2, 2), np.float32)), ParameterError, [".png (sRGB 8-bit), .exr (linear float), .npy (the array as is); got .bmp"]),
     ("image_shape", lambda r: penumbra.write_image("out.png", np.zeros((2, 2, 4), np.float32)), ParameterError, ["(H, W)"]),
     ("exr_nan", lambda r: penumbra.write_image("out.exr", np.full((2, 2), np.nan, np.float32)), ParameterError, ["non-finite"]),
     # Issue 8: more of the matrix (dtype, shape, NaN/Inf, ranges, geometry around the camera and light)

@@ -63,7 +63,9 @@ def test_render_mesh_file(tmp_path: Path) -> None:
         (["render", "--param", "oops"], "key=value"),
         (["render", "--mesh", "/nonexistent/file.obj"], "cannot read mesh file"),
         (["render", "--light-radius", "-1"], "radius"),
-        (["render", "-o", "out.bmp", "--width", "8", "--height", "8"], ".png or .exr"),
+        (["render", "-o", "out.bmp", "--width", "8", "--height", "8"], ".png (sRGB 8-bit), .exr (linear float), .npy (the array as is); got .bmp"),
+        # Issue 33: every accepted extension named, and the render not run first.
+        (["render", "-o", "x.txt", "--width", "8", "--height", "8"], "cannot write x.txt: the extension must be one of .png (sRGB 8-bit), .exr (linear float), .npy"),
         # Issue 8: more of the bad-input matrix through the command line.
         (["render", "--method", NOT_YET or "magic"], "not implemented" if NOT_YET else "unknown method"),
         (["render", "--light-radius", "nan"], "radius"),

@@ -191,7 +191,7 @@ def test_compare_a_mesh_file_skips_methods_that_refuse_it(needs_mitsuba_and_gpu:
     assert done.returncode == 0, done.stderr
     figures = json.loads((tmp_path / "f.json").read_text())
     assert [m["method"] for m in figures["methods"]] == ["hard"]
-    assert "not closed" in figures["skipped"]["pvm"] and "skipped pvm" in done.stdout
+    assert "not closed" in figures["skipped"]["pvm"] and "| pvm | skipped: " in done.stdout
 
 
 def test_compare_refuses_unknown_methods_and_lone_refusals(needs_mitsuba_and_gpu: None, tmp_path: Path) -> None:

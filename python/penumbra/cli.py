@@ -56,6 +56,9 @@ def _adapter(info: dict[str, Any]) -> str:
 def _render(args: argparse.Namespace) -> int:
     from penumbra.comparison import timed_render, timing_renderer
 
+    from penumbra.render import image_extension
+
+    image_extension(args.output)  # refused before the render, not after
     scene = _scene(args)
     params = dict(_param(p) for p in args.param)
     if args.repeats < 0:
@@ -101,10 +104,10 @@ def _compare(args: argparse.Namespace) -> int:
           f"{' (cached)' if all(gt.cached.values()) else ''}")
     print(f"times: {c.clock}; hard {c.baseline.warm_ms:.1f} ms")
     print(f"parameters: {json.dumps(params) if params else 'each method defaults'}")
+    for note in c.notes:
+        print(f"note: {note}")
     print()
     print(c.table())
-    for method, reason in c.skipped.items():
-        print(f"skipped {method}: {reason}")
     if len(c.rows) == 1:
         print()
         print(summary(c.rows[0].metrics))

@@ -158,6 +158,60 @@ def _truth(
     return ground_truth(scene, camera, spp=spp, seed=seed, noise_seed=noise_seed, cache_dir=cache_dir)
 
 
+#: A ``raytraced`` ground truth takes at least this many times the light
+#: samples of the ``raytraced`` render it judges (its noise then a quarter of
+#: the render's variance, half its RMSE), and seeds other than the render's.
+RAYTRACED_TRUTH_FACTOR = 4
+
+
+@dataclass
+class _TruthPlan:
+    """The ground truth's samples and seeds once made independent of the
+    method compared (:func:`_independent_truth`); ``note`` says what changed,
+    ``refused`` why the method cannot be judged by this truth."""
+
+    spp: int
+    seed: int
+    noise_seed: int | None
+    note: str | None = None
+    refused: str | None = None
+
+
+def _independent_truth(truth: str, raytraced_params: dict[str, Any] | None, spp: int, seed: int, noise_seed: int | None) -> _TruthPlan:
+    """A ``raytraced`` truth judging a ``raytraced`` render (its parameters
+    ``raytraced_params``; None when none is compared) must not be that render
+    again: at least :data:`RAYTRACED_TRUTH_FACTOR` times its light samples
+    (``spp`` raised to it when lower) and seeds other than its own (the next
+    free ones when ``seed`` or ``noise_seed`` is its seed). When the samples
+    needed exceed ``raytraced``'s most, the plan is refused with the reason."""
+    if truth != "raytraced" or raytraced_params is None:
+        return _TruthPlan(spp, seed, noise_seed)
+    from penumbra.render import method_info
+
+    info = method_info("raytraced")
+    effective = {**info.defaults(), **raytraced_params}
+    samples, own_seed = int(effective["n_samples"]), int(effective["seed"])
+    most = int(next(p.maximum for p in info.params if p.name == "n_samples"))
+    need = RAYTRACED_TRUTH_FACTOR * samples
+    if need > most:
+        return _TruthPlan(spp, seed, noise_seed, refused=(
+            f"a raytraced ground truth judging raytraced at n_samples={samples} needs {RAYTRACED_TRUTH_FACTOR}x its samples, "
+            f"{need}, beyond raytraced's {most}: lower n_samples to {most // RAYTRACED_TRUTH_FACTOR} or less, or use truth='mitsuba'"
+        ))
+    notes = []
+    if spp < need:
+        notes.append(f"{need} light samples ({RAYTRACED_TRUTH_FACTOR}x raytraced's n_samples={samples}) instead of the {spp} asked")
+        spp = need
+    if own_seed in (seed, noise_seed):
+        taken = {own_seed}
+        free = (k for k in range(seed, seed + 4) if k not in taken)
+        new_seed = next(free)
+        new_noise = None if noise_seed is None else next(k for k in free if k != new_seed)
+        notes.append(f"seeds {new_seed}" + (f" and {new_noise}" if new_noise is not None else "") + f", not raytraced's seed {own_seed}")
+        seed, noise_seed = new_seed, new_noise
+    return _TruthPlan(spp, seed, noise_seed, note="raytraced ground truth at " + "; ".join(notes) if notes else None)
+
+
 def compare(
     scene: Scene,
     method: str = "hard",
@@ -183,12 +237,19 @@ def compare(
     ``truth``: ``"mitsuba"`` (the independent default, cached under
     ``cache_dir``) or ``"raytraced"``: the engine's own method ``raytraced`` at
     ``spp`` light samples (:func:`penumbra.truth.raytraced_truth`; give it
-    thousands: 4096 for a noise floor near Mitsuba's at 1024), not cached."""
+    thousands: 4096 for a noise floor near Mitsuba's at 1024), not cached.
+    A raytraced truth judging method ``raytraced`` is never that render
+    again: it takes at least :data:`RAYTRACED_TRUTH_FACTOR` (4) times the
+    method's ``n_samples`` (``spp`` is raised to it) and seeds other than the
+    method's ``seed``; beyond ``raytraced``'s most samples it is refused."""
     if not isinstance(scene, Scene):
         raise SceneError(f"expected a penumbra.Scene, got {type(scene).__name__}")
+    plan = _independent_truth(truth, params if method == "raytraced" else None, spp, seed, noise_seed)
+    if plan.refused:
+        raise ParameterError(plan.refused)
     renderer = renderer or timing_renderer()
     result, timing = timed_render(renderer, scene, method, repeats=repeats, camera=camera, **params)
-    gt = _truth(truth, scene, camera, spp, seed, noise_seed, cache_dir, renderer)
+    gt = _truth(truth, scene, camera, plan.spp, plan.seed, plan.noise_seed, cache_dir, renderer)
     comparison = Comparison(result, gt, metrics_module.compare(result, gt), timing)
     if out is not None:
         comparison.save_figure(out)
@@ -288,6 +349,9 @@ class MethodComparison:
     adapter: dict[str, Any] = field(default_factory=dict)
     repeats: int = DEFAULT_REPEATS
     budget_s: float | None = DEFAULT_BUDGET_S
+    #: What the comparison changed from what was asked, in words (a raytraced
+    #: truth raised to 4x the raytraced row's samples, or given other seeds).
+    notes: list[str] = field(default_factory=list)
 
     def time_over_hard(self, row: Comparison) -> float:
         assert row.timing is not None
@@ -302,8 +366,9 @@ class MethodComparison:
                 f"taken in rounds of one render per method; passes by {passes}")
 
     def table(self) -> str:
-        """The figures of the picture as a markdown table, the ground truth's
-        noise in the last row."""
+        """The figures of the picture as a markdown table: a row per method
+        compared, a row per method skipped with its reason, the ground
+        truth's noise in the last row."""
         head = (
             "| method | penumbra RMSE | cast shadows | vis. RMSE | max error | FLIP | radiance RMSE (rel.) | warm ms | timed | time / hard | first render ms |\n"
             "|---|---|---|---|---|---|---|---|---|---|---|"
@@ -317,6 +382,9 @@ class MethodComparison:
                 f"{m['visibility_max_error']:.3f} | {m['visibility_flip']:.4f} | {m['radiance_rmse_rel']:.4f} | "
                 f"{t.warm_ms:.1f} | {len(t.timed_ms)} | {self.time_over_hard(row):.2f} | {t.cold_ms:.0f} |"
             )
+        for method, reason in self.skipped.items():
+            cell = " ".join(reason.split()).replace("|", "\\|")
+            lines.append(f"| {method} | skipped: {cell} |" + " |" * 9)
         if self.rows and "noise_visibility_rmse" in self.rows[0].metrics:
             m = self.rows[0].metrics
             lines.append(
@@ -357,6 +425,7 @@ class MethodComparison:
                 for row in self.rows
             ],
             "skipped": self.skipped,
+            "notes": self.notes,
         }
 
     def save_figure(self, path: str | os.PathLike[str]) -> None:
@@ -388,6 +457,12 @@ def compare_methods(
     ``raytraced``); one that no method compared declares is a
     :class:`~penumbra.errors.ParameterError`.
 
+    With ``truth="raytraced"`` and method ``raytraced`` among those compared,
+    the truth takes at least 4x the raytraced row's ``n_samples`` (``spp``
+    raised to it) and seeds other than the row's, said in ``notes``; when
+    that is more than ``raytraced`` takes, the row is left out with the
+    reason in ``skipped`` (raised when it is the only method).
+
     When more than one method is asked, a method that refuses the scene or the
     parameters (a :class:`~penumbra.errors.InvalidInputError`) is skipped
     with its reason in ``skipped``; a single method's refusal, or every
@@ -407,6 +482,18 @@ def compare_methods(
     params = dict(params or {})
     own = _params_per_method(names, params)
     say = progress or (lambda line: None)
+    # A raytraced truth is not the raytraced row again (RAYTRACED_TRUTH_FACTOR).
+    plan = _independent_truth(truth, own.get("raytraced") if "raytraced" in names else None, spp, seed, noise_seed)
+    left_out: dict[str, str] = {}
+    if plan.refused:
+        if names == ["raytraced"]:
+            raise ParameterError(plan.refused)
+        left_out["raytraced"] = plan.refused
+        names = [n for n in names if n != "raytraced"]
+        say(f"raytraced: left out: {plan.refused}")
+        plan = _TruthPlan(spp, seed, noise_seed)
+    if plan.note:
+        say(plan.note)
     renderer = renderer or timing_renderer()
     camera = camera or scene.camera
 
@@ -418,7 +505,7 @@ def compare_methods(
     timed_names = names if "hard" in names else [*names, "hard"]
     warm: dict[str, RenderResult] = {}
     cold: dict[str, float] = {}
-    skipped: dict[str, str] = {}
+    skipped: dict[str, str] = dict(left_out)
     errors: list[InvalidInputError] = []
     for i, name in enumerate(timed_names, 1):
         role = "" if name in names else ", the time baseline, with its defaults"
@@ -458,14 +545,14 @@ def compare_methods(
     baseline = timings["hard"]
 
     started = time.perf_counter()
-    say(f"ground truth: {truth}, {spp} spp, two seeds" + (" (cached after the first run)" if truth == "mitsuba" else ""))
-    gt = _truth(truth, scene, camera, spp, seed, noise_seed, cache_dir, renderer)
+    say(f"ground truth: {truth}, {plan.spp} spp, two seeds" + (" (cached after the first run)" if truth == "mitsuba" else ""))
+    gt = _truth(truth, scene, camera, plan.spp, plan.seed, plan.noise_seed, cache_dir, renderer)
     cached = all(gt.cached.values()) and (gt.second is None or all(gt.second.cached.values()))
     say(f"ground truth: {gt.variant}, {'read from the cache' if cached else 'rendered'} in {time.perf_counter() - started:.1f} s")
     rows = [Comparison(result, gt, _with_cast_shadows(metrics_module.compare(result, gt), result, gt, scene), timing)
             for result, timing in rendered]
     info = renderer.adapter_info
-    comparison = MethodComparison(scene, gt, rows, baseline, params, skipped, dict(info), repeats, budget_s)
+    comparison = MethodComparison(scene, gt, rows, baseline, params, skipped, dict(info), repeats, budget_s, [plan.note] if plan.note else [])
     if out is not None:
         say(f"drawing {os.fspath(out)}")
         comparison.save_figure(out)
@@ -649,6 +736,7 @@ def methods_figure(c: MethodComparison, path: str | os.PathLike[str]) -> None:
         f"Images cropped to the shadows ({crop}); errors clipped at +-{limit:g}.",
         "`penumbra compare` prints every figure as a table.",
     ]
+    notes += c.notes
     if c.skipped:
         notes += [f"Skipped {k}: {v if len(v) < 150 else v[:147] + '...'}" for k, v in c.skipped.items()]
     ax_n = fig.add_subplot(side[1])

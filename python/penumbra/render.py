@@ -120,6 +120,20 @@ def parameter_table(method: str) -> str:
     return "\n".join(rows)
 
 
+#: The image files :func:`write_image` writes, by extension.
+IMAGE_EXTENSIONS = {".png": "sRGB 8-bit", ".exr": "linear float", ".npy": "the array as is"}
+
+
+def image_extension(path: str) -> str:
+    """``path``'s extension, lower-cased, when :func:`write_image` writes it;
+    else a :class:`~penumbra.errors.ParameterError` naming every accepted one."""
+    extension = os.path.splitext(path)[1].lower()
+    if extension not in IMAGE_EXTENSIONS:
+        formats = ", ".join(f"{e} ({what})" for e, what in IMAGE_EXTENSIONS.items())
+        raise ParameterError(f"cannot write {path}: the extension must be one of {formats}; got {extension or 'none'}")
+    return extension
+
+
 def write_image(path: str | bytes | os.PathLike[str] | os.PathLike[bytes], image: np.ndarray) -> None:
     """Writes a linear float image (H, W) or (H, W, 3) by extension: ``.png``
     sRGB-encoded 8-bit, ``.exr`` linear float, ``.npy`` the array as is.
@@ -138,7 +152,7 @@ def write_image(path: str | bytes | os.PathLike[str] | os.PathLike[bytes], image
         raise ParameterError(f"image must be a numeric array: {e}") from None
     if array.dtype.kind not in "biuf":
         raise ParameterError(f"image must be a numeric array, got dtype {array.dtype}")
-    if path.lower().endswith(".npy"):
+    if image_extension(path) == ".npy":
         try:
             np.save(path, array)
         except OSError as e:

@@ -11,8 +11,10 @@ Configurations can be spread over processes with any
 ``concurrent.futures.Executor``; each worker process builds its own renderer
 once (a module-level one, with its own pass cache) and renders contiguous
 chunks of the grid, so late-stage sweeps keep their reuse within a chunk.
-The same call runs on a Dask cluster with ``executor=client.get_executor()``
-(``distributed.Client``), provided the workers have penumbra installed.
+The same call runs on a Dask cluster (``pip install penumbra[cluster]``):
+``executor=`` takes a ``distributed.Client`` or its ``get_executor()``; the
+scenes and ground truth then travel to the workers once, through the
+scheduler, instead of with every chunk (docs/sweeps.md).
 """
 
 from __future__ import annotations
@@ -109,6 +111,15 @@ class _Chunk:
     columns: tuple[str, ...] = ()
 
 
+@dataclass
+class _Shared:
+    """What every chunk of a sweep reads: sent to a Dask cluster once
+    (``Client.scatter``), not with each chunk."""
+
+    scenes: dict[str, Scene]
+    ground_truth: dict[str, GroundTruth]
+
+
 _PROCESS_RENDERER: Renderer | None = None
 
 
@@ -135,17 +146,57 @@ def _row(task: _Task, result: RenderResult, chunk: _Chunk) -> tuple[dict[str, An
     return row, images
 
 
+def _describe(task: _Task) -> str:
+    params = ", ".join(f"{k}={v!r}" for k, v in task.params.items()) or "defaults"
+    return f"sweep configuration {task.index} (scene {task.scene_name!r}, method {task.method!r}, {params}) on {_host()} pid {os.getpid()}"
+
+
+def _host() -> str:
+    import socket
+
+    return socket.gethostname()
+
+
+def _with_configuration(error: Exception, task: _Task) -> Exception:
+    """``error`` naming the configuration that raised it: the same class with
+    the configuration after the message where the class takes a message
+    (every Penumbra error does), else the original with a note. Either way
+    ``sweep_config`` holds the configuration as a dict."""
+    where = _describe(task)
+    try:
+        named = type(error)(f"{error}; in {where}")
+    except Exception:
+        named = error
+        named.add_note(f"in {where}")
+    named.sweep_config = {"config": task.index, "scene": task.scene_name, "method": task.method, "params": dict(task.params)}  # type: ignore[attr-defined]
+    return named
+
+
 def _run_chunk(chunk: _Chunk, renderer: Renderer | None = None) -> list[tuple[dict[str, Any], dict[str, np.ndarray] | None]]:
     """Renders a chunk in order (a worker's entry point; importable, so that
-    process pools and Dask can ship it)."""
+    process pools and Dask can ship it). A configuration that raises stops
+    the chunk with its error, naming the configuration."""
     renderer = renderer or process_renderer()
     out = []
     for task in chunk.tasks:
-        result = renderer.render(
-            chunk.scenes[task.scene_name], task.method, camera=chunk.camera, outputs=_outputs_needed(chunk, task), **task.params
-        )
-        out.append(_row(task, result, chunk))
+        try:
+            result = renderer.render(
+                chunk.scenes[task.scene_name], task.method, camera=chunk.camera, outputs=_outputs_needed(chunk, task), **task.params
+            )
+            out.append(_row(task, result, chunk))
+        except Exception as e:
+            named = _with_configuration(e, task)
+            if named is e:
+                raise
+            raise named from e
     return out
+
+
+def _run_shared_chunk(chunk: _Chunk, shared: _Shared) -> list[tuple[dict[str, Any], dict[str, np.ndarray] | None]]:
+    """A Dask worker's entry point: the chunk with the scenes and ground
+    truth scattered once for the whole sweep."""
+    chunk.scenes, chunk.ground_truth = shared.scenes, shared.ground_truth
+    return _run_chunk(chunk)
 
 
 def _outputs_needed(chunk: _Chunk, task: _Task) -> list[str]:
@@ -189,6 +240,31 @@ def _ground_truths(
     )
 
 
+def _dask_client(executor: Any) -> tuple[Any, dict[str, Any]] | None:
+    """The ``distributed.Client`` behind ``executor`` (the client itself or
+    its ``get_executor()``) and the submit options the executor was made
+    with; None for any other executor. Recognised by its module, so that
+    distributed is imported only when given one of its objects."""
+    module = type(executor).__module__ or ""
+    if not (module == "distributed" or module.startswith("distributed.")):
+        return None
+    if type(executor).__name__ == "ClientExecutor":
+        return executor._client, dict(getattr(executor, "_kwargs", {}))
+    if hasattr(executor, "scatter") and hasattr(executor, "submit") and hasattr(executor, "nthreads"):
+        return executor, {}
+    raise ParameterError(f"executor: a {module}.{type(executor).__name__} is neither a distributed.Client nor its get_executor()")
+
+
+def _worker_count(executor: Any, client: Any) -> int:
+    """Workers that render at once: a Dask cluster's worker threads (each
+    worker process's threads, summed), a pool's ``_max_workers``."""
+    if client is not None:
+        threads = sum(int(n) for n in client.nthreads().values())
+        return max(threads, 1)
+    workers = getattr(executor, "_max_workers", None)
+    return int(workers) if isinstance(workers, int) and workers > 0 else os.cpu_count() or 1
+
+
 def _progress_bar(total: int, progress: bool | None) -> Any:
     show = progress if progress is not None else sys.stderr.isatty()
     if not show:
@@ -207,7 +283,7 @@ def sweep(
     ground_truth_spp: int = 256,
     camera: Camera | None = None,
     renderer: Renderer | None = None,
-    executor: concurrent.futures.Executor | None = None,
+    executor: concurrent.futures.Executor | Any | None = None,
     chunksize: int | None = None,
     keep_images: bool | Sequence[str] = False,
     progress: bool | None = None,
@@ -245,14 +321,22 @@ def sweep(
 
     ``renderer``: the renderer for in-process sweeps (default: one per
     process, kept between sweeps, so repeated sweeps reuse its cache).
-    ``executor``: any ``concurrent.futures.Executor``; configurations go to
+    ``executor``: any ``concurrent.futures.Executor``, or a Dask
+    ``distributed.Client`` (or its ``get_executor()``); configurations go to
     it in contiguous chunks of ``chunksize`` (default: about two chunks per
-    worker), each worker rendering with its own process-wide renderer. With a
-    ``ProcessPoolExecutor`` that is one renderer per process; on Dask, pass
-    ``distributed.Client(...).get_executor()``. Timings from concurrent
+    worker: a pool's ``max_workers``, a Dask cluster's worker threads), each
+    worker rendering with its own process-wide renderer, so a chunk's
+    configurations reuse each other's passes. The ground truth is rendered
+    once per scene, in this process, before any chunk is sent; on Dask the
+    scenes and ground truth are scattered to the cluster once and every
+    chunk reads them from there. A configuration that raises stops the
+    sweep with its error, of the same class, naming the configuration (its
+    index, scene, method and parameters, and the worker's host and pid;
+    ``error.sweep_config`` holds them as a dict). Timings from concurrent
     workers share the machine's cores: time with ``executor=None``.
 
-    ``progress``: a tqdm bar (default: only when stderr is a terminal).
+    ``progress``: a tqdm bar, advanced as each chunk comes back (default:
+    only when stderr is a terminal).
     """
     import pandas as pd
 
@@ -282,17 +366,36 @@ def sweep(
         else:
             if renderer is not None:
                 raise ParameterError("renderer= is for in-process sweeps; executor workers build their own")
-            workers = getattr(executor, "_max_workers", None) or os.cpu_count() or 1
-            size = chunksize or max(1, math.ceil(len(tasks) / (2 * workers)))
-            futures = [
-                executor.submit(_run_chunk, _Chunk(named, camera, tasks[i : i + size], truths, kept, columns))
-                for i in range(0, len(tasks), size)
-            ]
-            for future in concurrent.futures.as_completed(futures):
-                done = future.result()
-                rows.extend(done)
-                if bar is not None:
-                    bar.update(len(done))
+            dask = _dask_client(executor)
+            client, options = dask if dask is not None else (None, {})
+            size = chunksize or max(1, math.ceil(len(tasks) / (2 * _worker_count(executor, client))))
+            starts = range(0, len(tasks), size)
+            if client is not None:
+                from distributed import as_completed
+
+                # Scenes and truths once for the whole sweep; each chunk names them.
+                shared = client.scatter(_Shared(named, truths), hash=False, **{k: v for k, v in options.items() if k == "workers"})
+                options = {"pure": False, **options}
+                futures = [
+                    client.submit(_run_shared_chunk, _Chunk({}, camera, tasks[i : i + size], {}, kept, columns), shared, **options)
+                    for i in starts
+                ]
+                completed: Any = as_completed(futures)
+            else:
+                futures = [
+                    executor.submit(_run_chunk, _Chunk(named, camera, tasks[i : i + size], truths, kept, columns)) for i in starts
+                ]
+                completed = concurrent.futures.as_completed(futures)
+            try:
+                for future in completed:
+                    done = future.result()
+                    rows.extend(done)
+                    if bar is not None:
+                        bar.update(len(done))
+            except BaseException:
+                for future in futures:
+                    future.cancel()
+                raise
     finally:
         if bar is not None:
             bar.close()

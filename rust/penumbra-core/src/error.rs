@@ -26,9 +26,14 @@ pub enum Error {
     /// the message names the feature, the adapter and how to get one that has it.
     #[error("{0}")]
     MissingFeature(String),
-    /// The GPU reported an error while rendering (out of memory, validation, device lost).
+    /// The GPU reported an error while rendering (validation, device lost).
     #[error("GPU error: {0}")]
     Gpu(String),
+    /// The GPU ran out of memory. The renderer rewrites the adapter's words
+    /// into a message naming what the render asked for (image size, map size
+    /// and projection) and what to lower (`Renderer::render`).
+    #[error("{0}")]
+    OutOfMemory(String),
     /// Reading or writing a file failed.
     #[error("{0}")]
     Io(String),

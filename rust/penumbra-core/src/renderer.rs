@@ -220,10 +220,32 @@ impl Renderer {
                 prepared.triangle_count
             )));
         }
-        let result = self.ctx.scoped(|| self.record_and_read(scene, camera, method, options, &prepared));
+        let chosen_map_size = std::cell::Cell::new(None);
+        let result = self.ctx.scoped(|| self.record_and_read(scene, camera, method, options, &prepared, &chosen_map_size));
         // Every handle of the frame is dropped: its resources are free again.
         self.pool.end_frame();
-        let mut result = result?;
+        let (mut result, fresh) = match result {
+            Ok(done) => done,
+            Err(e) => {
+                // A resource whose allocation failed is invalid in every later
+                // call, and a free one could be handed to the next render:
+                // release them all (the pass cache only takes a render's
+                // outputs once it succeeded, below).
+                if matches!(e, Error::OutOfMemory(_) | Error::Gpu(_)) {
+                    self.pool.clear();
+                }
+                return Err(match e {
+                    Error::OutOfMemory(detail) => {
+                        Error::OutOfMemory(out_of_memory_message(method, camera, chosen_map_size.get(), prepared.triangle_count, &detail))
+                    }
+                    e => e,
+                });
+            }
+        };
+        // Submitted, waited for and free of GPU errors: what ran may now be reused.
+        for (name, key, value) in fresh {
+            self.cache.insert(name, key, value);
+        }
         result.total_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(result)
     }
@@ -235,7 +257,8 @@ impl Renderer {
         method: &MethodConfig,
         options: &RenderOptions,
         prepared: &PreparedScene,
-    ) -> Result<RenderResult> {
+        chosen_map_size: &std::cell::Cell<Option<u32>>,
+    ) -> Result<(RenderResult, Vec<(&'static str, PassKey, crate::pass_cache::Entry)>)> {
         let device = &self.ctx.device;
         let size = (camera.width, camera.height);
         let (projection, _, _) = camera.projection(prepared.bounds_min, prepared.bounds_max);
@@ -278,6 +301,7 @@ impl Renderer {
             Some(mode) => {
                 let projection = frame.ctx.projection(mode)?;
                 let map_size = crate::map_size::auto_map_size(&projection, camera, prepared, frame.ctx.max_texture_side());
+                chosen_map_size.set(Some(map_size));
                 resolved = method.with_map_size(map_size)?;
                 frame.stat("map_size_auto", 1);
                 &resolved
@@ -361,10 +385,9 @@ impl Renderer {
         let ticks = if has_timestamps { all.pop() } else { None };
         let timings = profile.timings(ticks);
         let mut bytes = all.into_iter();
-        // Submitted and waited for: what ran may now be reused.
-        for (name, key, value) in record.fresh {
-            self.cache.insert(name, key, value);
-        }
+        // Submitted and waited for: what ran may be reused once the error
+        // scope shows the render free of GPU errors (`render`).
+        let fresh = record.fresh;
         let mut next = || readback::cast_vec::<f32>(bytes.next().unwrap_or_default());
         let (w, h) = (size.0 as usize, size.1 as usize);
         let mut images = Vec::new();
@@ -428,13 +451,62 @@ impl Renderer {
         let mut timings = timings;
         timings.passes.push(("readback".into(), readback_start.elapsed().as_secs_f64() * 1e3));
         drop(record.held);
-        Ok(RenderResult {
-            method: method.name(),
-            params: method.effective_params(),
-            images,
-            timings,
-            total_ms: 0.0,
-            stats,
-        })
+        let result = RenderResult { method: method.name(), params: method.effective_params(), images, timings, total_ms: 0.0, stats };
+        Ok((result, fresh))
     }
+}
+
+/// Bytes of one shadow-map face (`shadow_map::FORMAT`, 32-bit depth).
+const MAP_TEXEL_BYTES: u64 = 4;
+
+fn gib(bytes: u64) -> String {
+    format!("{:.1} GiB", bytes as f64 / (1u64 << 30) as f64)
+}
+
+/// The out-of-memory message of a render: what it asked for (image, map size
+/// and projection, with the maps' memory) and what to lower, then the
+/// adapter's own words (`detail`).
+fn out_of_memory_message(method: &MethodConfig, camera: &Camera, chosen_map_size: Option<u32>, triangles: usize, detail: &str) -> String {
+    let params = method.effective_params();
+    let mut asked = vec![format!("an image of {}x{}", camera.width, camera.height)];
+    let mut fixes = Vec::new();
+    let map_size = match params.get("map_size") {
+        Some(ParamValue::Int(n)) => Some((format!("map_size {n}"), *n as u64)),
+        Some(_) => chosen_map_size.map(|n| (format!("map_size 'auto' (chose {n})"), n as u64)),
+        None => None,
+    };
+    if let Some((words, side)) = &map_size {
+        let side = *side;
+        let face = side * side * MAP_TEXEL_BYTES;
+        let projection = match params.get("projection") {
+            Some(ParamValue::Str(p)) => p.clone(),
+            _ => "frustum".into(),
+        };
+        let maps = match projection.as_str() {
+            "cube" => format!("a cube map of six {side}x{side} faces takes {}", gib(6 * face)),
+            "frustum" => format!("a {side}x{side} map takes {}", gib(face)),
+            _ => format!("a {side}x{side} frustum map takes {}, a cube map of six faces {}", gib(face), gib(6 * face)),
+        };
+        asked.push(format!("{words} and projection '{projection}' ({maps})"));
+        fixes.push("a smaller map_size (or 'auto', sized to the image)".to_owned());
+        if projection != "frustum" {
+            fixes.push("projection='frustum' (one map where a cube map has six faces)".to_owned());
+        }
+    }
+    if let Some(ParamValue::Int(depth)) = params.get("max_depth") {
+        asked.push(format!("max_depth {depth}"));
+        fixes.push("a lower max_depth (each level up to four times the maps)".to_owned());
+    }
+    fixes.push("a smaller image".to_owned());
+    if map_size.is_none() {
+        fixes.push(format!("fewer triangles (the scene has {triangles})"));
+    }
+    let last = fixes.pop().unwrap_or_default();
+    let fixes = if fixes.is_empty() { last } else { format!("{} or {last}", fixes.join(", ")) };
+    let detail = detail.strip_prefix("out of GPU memory: ").unwrap_or(detail);
+    format!(
+        "out of GPU memory rendering method '{}' with {}: try {fixes}. (The adapter said: {detail}.)",
+        method.name(),
+        asked.join(", "),
+    )
 }

@@ -40,7 +40,7 @@ fn to_py(e: core::Error) -> PyErr {
         core::Error::InvalidParameter(_) => ParameterError::new_err(message),
         core::Error::GpuUnavailable(_) => GpuUnavailableError::new_err(message),
         core::Error::MissingFeature(_) => GpuFeatureError::new_err(message),
-        core::Error::Gpu(_) => GpuError::new_err(message),
+        core::Error::Gpu(_) | core::Error::OutOfMemory(_) => GpuError::new_err(message),
         core::Error::Io(_) => PenumbraIOError::new_err(message),
     }
 }

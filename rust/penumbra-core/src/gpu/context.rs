@@ -182,7 +182,9 @@ impl GpuContext {
     }
 
     /// Runs `work` with validation and out-of-memory errors captured, turning
-    /// any into [`Error::Gpu`] instead of a panic.
+    /// any into [`Error::OutOfMemory`] or [`Error::Gpu`] instead of a panic. An
+    /// out-of-memory error wins over the validation errors it causes (a
+    /// texture that could not be allocated is invalid in every later call).
     pub fn scoped<T>(&self, work: impl FnOnce() -> Result<T>) -> Result<T> {
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -190,7 +192,7 @@ impl GpuContext {
         let validation_error = pollster::block_on(validation.pop());
         let oom_error = pollster::block_on(oom.pop());
         if let Some(e) = oom_error {
-            return Err(Error::Gpu(format!("out of GPU memory: {e}")));
+            return Err(Error::OutOfMemory(format!("out of GPU memory: {e}")));
         }
         if let Some(e) = validation_error {
             return Err(Error::Gpu(e.to_string()));

@@ -36,7 +36,7 @@ use crate::frame::{Frame, FrameContext, Intermediate};
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
 use crate::gpu::PassTimestamps;
-use crate::light_frustum::{light_sample_error, LightProjection};
+use crate::light_frustum::{light_sample_error, LightProjection, ProjectionMode};
 use crate::methods::reference::{disk_point, scene_axis};
 use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::passes::samplers::Filter;
@@ -51,6 +51,37 @@ pub const MAX_DEPTH: u32 = 6;
 /// The most memory the maps of a full grid may take (they are all kept until
 /// the evaluation): `max_depth` and `map_size` beyond it are refused.
 const MAP_BUDGET_BYTES: u64 = 2 << 30;
+
+/// Bytes of one face of a light point's map (32-bit depth).
+fn face_bytes(map_size: u32) -> u64 {
+    (map_size as u64).pow(2) * 4
+}
+
+/// The refusal of a render whose maps would take `bytes`: `maps` maps of
+/// `faces` (in words), `when` ("may keep": the full grid), `cube_faces`
+/// whether cube maps' six faces are among those counted.
+fn over_budget(params: &AdaptiveParams, maps: u64, faces: &str, bytes: u64, when: &str, cube_faces: bool) -> Error {
+    let mut fixes = Vec::new();
+    if params.max_depth > 0 {
+        let lower = params.max_depth - 1;
+        fixes.push(format!("lower max_depth (max_depth {lower} keeps at most {} maps)", ((1u64 << lower) + 1).pow(2)));
+    }
+    fixes.push("a smaller map_size".to_owned());
+    if cube_faces {
+        fixes.push("projection='frustum' (one face per map where a cube map has six)".to_owned());
+    }
+    Error::InvalidParameter(format!(
+        "adaptive: max_depth {} with map_size {} and projection '{}' {when} {maps} maps of {faces} ({:.2} MiB a face), \
+         {:.2} GiB, more than the {} GiB allowed; try {}",
+        params.max_depth,
+        params.shadow.map_size,
+        params.shadow.projection.name(),
+        face_bytes(params.shadow.map_size) as f64 / (1u64 << 20) as f64,
+        bytes as f64 / (1u64 << 30) as f64,
+        MAP_BUDGET_BYTES >> 30,
+        fixes.join(", "),
+    ))
+}
 
 const LEVEL_PASSES: [&str; MAX_DEPTH as usize + 1] = ["level0", "level1", "level2", "level3", "level4", "level5", "level6"];
 const SUMS: [&str; MAX_DEPTH as usize] =
@@ -375,20 +406,15 @@ impl Method for AdaptiveShadows {
             weights: if p.choice("weights") == "area" { Weights::Area } else { Weights::Eq3 },
         };
         // map_size 'auto' (0 here) is checked once the renderer resolves it
-        // and parses the parameters again.
+        // and parses the parameters again. The full grid, each map with its
+        // faces: six for a cube, one for a frustum, and for 'auto' one here
+        // (its least), the maps' real faces counted as they are fitted (`record`).
         let side = (1u64 << params.max_depth) + 1;
-        let bytes = side * side * (params.shadow.map_size as u64).pow(2) * 4;
+        let faces = if params.shadow.projection == ProjectionMode::Cube { 6 } else { 1 };
+        let bytes = side * side * faces * face_bytes(params.shadow.map_size);
         if bytes > MAP_BUDGET_BYTES {
-            return Err(Error::InvalidParameter(format!(
-                "adaptive: max_depth {} with map_size {} may keep {} maps of {} MiB each ({} GiB), more than the {} GiB allowed; \
-                 lower max_depth or map_size",
-                params.max_depth,
-                params.shadow.map_size,
-                side * side,
-                ((params.shadow.map_size as u64).pow(2) * 4) >> 20,
-                bytes >> 30,
-                MAP_BUDGET_BYTES >> 30
-            )));
+            let faces = if faces == 6 { "6 cube faces" } else { "one face" };
+            return Err(over_budget(&params, side * side, faces, bytes, "may keep", faces == "6 cube faces"));
         }
         Ok(params)
     }
@@ -463,6 +489,16 @@ impl Method for AdaptiveShadows {
                 break;
             }
             let projections = Self::fit_maps(&frame.ctx, params, &new_points, maps.len(), max_points)?;
+            // The maps held so far and this level's, with their real faces
+            // (projection 'auto' makes a cube map where the frustum cannot
+            // cover the geometry), before this level allocates any.
+            let faces: u64 = maps.iter().map(|m| m.projection.layers() as u64).chain(projections.iter().map(|p| p.layers() as u64)).sum();
+            let held = faces * face_bytes(params.shadow.map_size);
+            if held > MAP_BUDGET_BYTES {
+                let count = (maps.len() + projections.len()) as u64;
+                let words = format!("{faces} faces in all");
+                return Err(over_budget(params, count, &words, held, &format!("would hold at level {level}"), faces > count));
+            }
             let want_images = frame.wants_intermediates() && !to_test.is_empty();
             // Corner maps of each tested cell, by index into maps (old and new).
             let cell_maps: Vec<[usize; 4]> = to_test.iter().map(|c| tree.corners(*c).map(|p| tree.index_of(p))).collect();

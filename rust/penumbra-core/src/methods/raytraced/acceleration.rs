@@ -280,7 +280,7 @@ impl AccelerationCache {
             let validation_error = pollster::block_on(validation.pop());
             let oom_error = pollster::block_on(oom.pop());
             if let Some(e) = oom_error {
-                return Err(Error::Gpu(format!("out of GPU memory building acceleration structures: {e}")));
+                return Err(Error::OutOfMemory(format!("out of GPU memory building acceleration structures: {e}")));
             }
             if let Some(e) = validation_error {
                 return Err(Error::Gpu(format!("building acceleration structures: {e}")));
