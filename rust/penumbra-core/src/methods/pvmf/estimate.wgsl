@@ -22,6 +22,8 @@ struct PvmfSettings {
     // fail the shadow-map test outside every volume (else filter them, 5.2);
     // bit 2: repair "horizon".
     flags: u32,
+    // The blur takes only pixels whose w_pcf is at least this many texels.
+    blur_min_width: f32,
 };
 @group(0) @binding(7) var<storage, read> settings_params: PvmfSettings;
 // Per-invocation copies of the parameters, read once in `main` (as in pcss/visibility.wgsl).
@@ -137,7 +139,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                     sum += pcf_tap(pvmf, shadow_map, shadow_sampler, r, r.coords + s * w);
                 }
                 v = sum / f32(n_pcf * n_pcf);
-                blur = 1.0;
+                // 5.3 blurs every filtered pixel; a filter narrower than
+                // blur_min_width texels left no jitter noise to hide.
+                blur = select(0.0, 1.0, max(w.x, w.y) >= settings.blur_min_width);
             }
             if (horizon) {
                 v = min(v, horizon_fraction(pvmf, p, n));
