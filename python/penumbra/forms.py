@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from collections.abc import Callable
+
 from .scene import Camera, Mesh, Scene, SphereLight
 
 FORMS = ("soup", "split", "doubled", "reversed", "slivers", "mirrored", "translated")
@@ -76,7 +78,8 @@ def with_slivers(mesh: Mesh, *, count: int = 40, seed: int = 0) -> Mesh:
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     size = _size(vertices)
-    extra_vertices, extra_faces = [], []
+    extra_vertices: list[np.ndarray] = []
+    extra_faces: list[list[int]] = []
     for i, f in enumerate(rng.choice(len(faces), size=count, replace=count > len(faces))):
         k = int(rng.integers(3))
         a, b = int(faces[f][k]), int(faces[f][(k + 1) % 3])
@@ -117,7 +120,7 @@ def translated(scene: Scene, offset: tuple[float, float, float]) -> Scene:
     return _moved(scene, meshes, lambda p: np.asarray(p, dtype=np.float64) + shift, lambda d: np.asarray(d, dtype=np.float64))
 
 
-def _moved(scene: Scene, meshes: list[Mesh], point, direction) -> Scene:  # type: ignore[no-untyped-def]
+def _moved(scene: Scene, meshes: list[Mesh], point: Callable[[object], np.ndarray], direction: Callable[[object], np.ndarray]) -> Scene:
     light = SphereLight(point(scene.light.center), scene.light.radius, intensity=scene.light.intensity)
     c = scene.camera
     assert c is not None, "a scene to move needs a camera"

@@ -405,9 +405,10 @@ mod tests {
     fn a_fin_on_one_side_is_a_silhouette_and_fins_on_both_sides_are_not() {
         // Edge 0-1 along x at the origin, the light above: faces hang off it
         // on the -z side, or on both sides.
-        let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(0.5, -0.2, -1.0), DVec3::new(0.5, 0.3, -1.0), DVec3::new(0.5, 0.0, 1.0)];
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(0.5, -0.2, -1.0), DVec3::new(0.5, 0.3, -1.0), DVec3::new(0.5, 0.0, 1.0), DVec3::new(0.5, 0.05, -1.0)];
         let l = DVec3::new(0.5, 5.0, 0.1);
-        let one_side = Topology::build(&p, &[[0, 1, 2], [0, 1, 3], [1, 0, 3]]);
+        // Three distinct fins (a fin given twice, in either winding, would be one face).
+        let one_side = Topology::build(&p, &[[0, 1, 2], [0, 1, 3], [1, 0, 5]]);
         assert_eq!(one_side.non_manifold.len(), 1);
         let edges: Vec<_> = silhouette(&one_side, l, true).into_iter().filter(|e| (e.ia.min(e.ib), e.ia.max(e.ib)) == (0, 1)).collect();
         assert_eq!(edges.len(), 1);
