@@ -44,8 +44,11 @@ struct Bounds {
 };
 
 @group(0) @binding(2) var<storage, read> settings: MaskSettings;
+// The light samples, in words of 32 (mod.rs orders them so that a word's
+// lie close together), then per word the ball around its samples (position:
+// centre xyz, radius w).
 @group(0) @binding(3) var<storage, read> samples: array<LightSample>;
-// Three corners (xyz) per triangle.
+// Per triangle: its bounding ball (centre xyz, radius w), then its three corners (xyz).
 @group(0) @binding(4) var<storage, read> triangles: array<vec4<f32>>;
 // The tiles' boxes, then the groups'.
 @group(0) @binding(5) var<storage, read_write> bounds: array<Bounds>;
@@ -142,11 +145,14 @@ fn group_bounds(@builtin(global_invocation_id) id: vec3<u32>) {
 // the margin, so that rounding never drops a triangle):
 // 1. its bounding box against the box around both;
 // 2. its plane: some of the box or of the sphere lies on either side;
-// 3. its bounding sphere against the hull of the box's bounding sphere and
-//    the light's, which lies within max(radii) of the segment between
-//    their centres (the hull of two balls is the union of the balls
-//    interpolated between them).
-fn can_shadow(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, box: Bounds) -> bool {
+// 3. its bounding ball against the hull of the box's bounding ball B(q, rq)
+//    and the light's B(l, r): the union of the balls B(P(t), R(t))
+//    interpolated between them (P, R linear in t). A point whose closest
+//    axis point is P(t) (t clamped to [0, 1]) lies within
+//    R(t) / sqrt(1 - s^2) of it, s = |r - rq| / |l - q| (maximise
+//    R(t')^2 - (t - t')^2 |l - q|^2 with R(t') <= R(t) + s |t - t'| |l - q|),
+//    and always within max(rq, r).
+fn can_shadow(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, ball: vec4<f32>, box: Bounds) -> bool {
     let margin = settings.offset.y;
     let l = settings.light.xyz;
     let r = settings.light.w + margin;
@@ -159,12 +165,12 @@ fn can_shadow(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, box: Bounds) -> bool {
     }
     let n = cross(b - a, c - a);
     let n_len = length(n);
-    let center = 0.5 * (box.lo.xyz + box.hi.xyz);
-    let half = 0.5 * (box.hi.xyz - box.lo.xyz) + vec3<f32>(margin);
     // A zero-area triangle hides nothing (`occlude` needs a strict crossing of its plane).
     if (n_len == 0.0) {
         return false;
     }
+    let center = 0.5 * (box.lo.xyz + box.hi.xyz);
+    let half = 0.5 * (box.hi.xyz - box.lo.xyz) + vec3<f32>(margin);
     let box_mid = dot(n, center - a);
     let box_reach = dot(abs(n), half);
     let light_mid = dot(n, l - a);
@@ -174,19 +180,23 @@ fn can_shadow(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, box: Bounds) -> bool {
     if (above || below) {
         return false;
     }
-    let m = (a + b + c) / 3.0;
-    let t_radius = sqrt(max(dot(a - m, a - m), max(dot(b - m, b - m), dot(c - m, c - m))));
+    let rq = length(half);
     let axis = l - center;
-    let axis_len2 = dot(axis, axis);
-    // The closest point of the axis segment to m (a point for a zero-length axis).
-    let t = select(0.0, clamp(dot(m - center, axis) / axis_len2, 0.0, 1.0), axis_len2 > 0.0);
-    let d = m - (center + axis * t);
-    let reach = max(length(half), r) + t_radius + margin;
+    let axis_len = length(axis);
+    // The closest point of the axis segment to the ball's centre (t = 0 for a zero-length axis).
+    let t = select(0.0, clamp(dot(ball.xyz - center, axis) / (axis_len * axis_len), 0.0, 1.0), axis_len > 0.0);
+    let d = ball.xyz - (center + axis * t);
+    let s = select(1.0, abs(r - rq) / axis_len, axis_len > 0.0);
+    var hull = max(rq, r);
+    if (s < 0.99) {
+        hull = min(hull, mix(rq, r, t) / sqrt(1.0 - s * s));
+    }
+    let reach = hull + ball.w + margin;
     return dot(d, d) <= reach * reach;
 }
 
 fn corner(i: u32, k: u32) -> vec3<f32> {
-    return triangles[3u * i + k].xyz;
+    return triangles[4u * i + 1u + k].xyz;
 }
 
 // Per triangle (mode 0: count, 1: fill): the tiles it can shadow, through
@@ -196,11 +206,12 @@ fn bin_triangle(i: u32, fill: bool) {
     let a = corner(i, 0u);
     let b = corner(i, 1u);
     let c = corner(i, 2u);
+    let ball = triangles[4u * i];
     let tiles = tile_count();
     for (var gy = 0u; gy < settings.tiles.w; gy++) {
         for (var gx = 0u; gx < settings.tiles.z; gx++) {
             let g = bounds[tiles + gy * settings.tiles.z + gx];
-            if (g.hi.w == 0.0 || !can_shadow(a, b, c, g)) {
+            if (g.hi.w == 0.0 || !can_shadow(a, b, c, ball, g)) {
                 continue;
             }
             let last = min(vec2<u32>(gx + 1u, gy + 1u) * GROUP, settings.tiles.xy);
@@ -208,7 +219,7 @@ fn bin_triangle(i: u32, fill: bool) {
                 for (var x = gx * GROUP; x < last.x; x++) {
                     let t = y * settings.tiles.x + x;
                     let box = bounds[t];
-                    if (box.hi.w == 0.0 || !can_shadow(a, b, c, box)) {
+                    if (box.hi.w == 0.0 || !can_shadow(a, b, c, ball, box)) {
                         continue;
                     }
                     let slot = atomicAdd(&bins[t], 1u);
@@ -315,75 +326,139 @@ struct PixelWork {
     // every chunk's mask filled before its list ended.
     pairs: u32,
     per_sample: u32,
+    past_cone: u32,
     ended_early: bool,
 };
 
-var<private> mask: array<u32, CHUNK_WORDS>;
+// The pixel's segment origin and the cone from it around the light's
+// sphere: unit axis, distance to the centre, the half-angle's sine and
+// cosine; and the slack that widens every whole-sphere or whole-word test so
+// that rounding only ever sends a pair or a word to the test per sample
+// (float32 rounding of the samples, balls and dot products is within a few
+// 1e-7 of |l - o| + r; the slack is 1e-4 of it).
+struct Cone {
+    o: vec3<f32>,
+    axis: vec3<f32>,
+    distance: f32,
+    sin_a: f32,
+    cos_a: f32,
+    slack: f32,
+    eps: f32,
+};
 
-// ORs into `mask` (the chunk of `words` words from sample `base`) the
-// samples whose segment from `o` crosses triangle (a, b, c): s beyond the
-// triangle's plane from o (strictly) and inside the three planes through o
-// and its edges (the projection of the sample from o falls in the triangle,
-// the paper's three edge half-planes, section 3, evaluated per sample
-// rather than through its lookup textures). Returns 0 when the light's
-// sphere is wholly outside (no sample tested), 2 when wholly inside (every
-// bit set), 1 when each sample was tested. Hits closer than the offset eps
-// to o are ignored, as raytraced's ray queries' t_min does.
-fn occlude(o: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, base: u32, words: u32, eps: f32) -> u32 {
+fn pixel_cone(o: vec3<f32>, eps: f32) -> Cone {
+    let u = settings.light.xyz - o;
+    // Receivers lie outside the light (scene validation): the distance is
+    // positive and above the radius; the floor keeps a degenerate input finite.
+    let distance = max(length(u), 1e-30);
+    let sin_a = min(settings.light.w / distance, 1.0);
+    return Cone(o, u / distance, distance, sin_a, sqrt(max(1.0 - sin_a * sin_a, 0.0)), 1e-4 * (settings.light.w + distance), eps);
+}
+
+var<private> mask: array<u32, CHUNK_WORDS>;
+// Words of the chunk's mask not yet full.
+var<private> open_words: u32;
+
+fn fill_word(w: u32) {
+    if (mask[w] != FULL) {
+        open_words -= 1u;
+        mask[w] = FULL;
+    }
+}
+
+// ORs into `mask` (the chunk of `words` words from word `first_word`) the
+// samples whose segment from the cone's origin o crosses triangle `i`: s
+// beyond the triangle's plane from o (strictly) and inside the three planes
+// through o and its edges, where its projection from o falls in the
+// triangle: the paper's three edge half-planes (section 3), evaluated per
+// sample rather than through its lookup textures. Culled in order: the
+// triangle's bounding ball against the cone from o around the light; the
+// light's sphere against the four planes (wholly outside one: no sample;
+// wholly inside all: every bit); then per word, its samples' ball the same
+// way, and the samples of the words a plane cuts one by one. Hits closer
+// than eps to o are ignored, as raytraced's ray queries' t_min does.
+// Returns 0 (culled by the cone), 1 (culled by a plane of the light),
+// 2 (tested per word or sample) or 3 (every bit set).
+fn occlude(cone: Cone, i: u32, first_word: u32, words: u32) -> u32 {
     let l = settings.light.xyz;
     let r = settings.light.w;
+    let o = cone.o;
+    let slack = cone.slack;
+    // The ball (m, rho) meets the cone only if its centre is within rho of
+    // it: perp cos(a) - along sin(a) is at most m's distance to the cone
+    // (to its apex behind o), and the segments end within r beyond l.
+    let ball = triangles[4u * i];
+    let v = ball.xyz - o;
+    let along = dot(v, cone.axis);
+    let perp = sqrt(max(dot(v, v) - along * along, 0.0));
+    let rho = ball.w + slack;
+    if (perp * cone.cos_a - along * cone.sin_a > rho || along < -rho || along > cone.distance + r + rho) {
+        return 0u;
+    }
+    let a = triangles[4u * i + 1u].xyz;
+    let b = triangles[4u * i + 2u].xyz;
+    let c = triangles[4u * i + 3u].xyz;
     let n = cross(b - a, c - a);
     let n_len = length(n);
     let d_o = dot(n, o - a);
     // o in the plane (or a zero-area triangle): no segment crosses it strictly.
     if (d_o == 0.0 || n_len == 0.0) {
-        return 0u;
+        return 1u;
     }
     let side = sign(d_o);
-    // The sphere's reach from any plane through o or of the triangle is
-    // widened by `slack`, so that rounding in these tests only ever sends a
-    // pair to the per-sample test: float32 rounding of the samples and of
-    // the dot products is within a few 1e-7 of |l - o| + r.
-    let slack = 1e-4 * (r + length(l - o));
-    // The light's centre from the triangle's plane, towards o positive.
-    let light_plane = side * dot(n, l - a) / n_len;
+    // The unit normal towards o.
+    let h = n * (side / n_len);
+    let light_plane = dot(h, l - a);
     if (light_plane > r + slack) {
-        return 0u;
+        return 1u;
     }
-    let beyond_all = light_plane < -(r + slack);
     // Edge planes through o, oriented so that the triangle's inside is
-    // positive: det(a - o, b - o, c - o) = -d_o (the triple product).
-    let e0 = cross(a - o, b - o) * -side;
-    let e1 = cross(b - o, c - o) * -side;
-    let e2 = cross(c - o, a - o) * -side;
-    var inside_all = beyond_all;
-    var test = vec3<bool>(true, true, true);
-    var es = array<vec3<f32>, 3>(e0, e1, e2);
+    // positive (det(a - o, b - o, c - o) = -d_o, the triple product), unit.
+    var e = array<vec3<f32>, 3>(cross(a - o, b - o) * -side, cross(b - o, c - o) * -side, cross(c - o, a - o) * -side);
+    var inside_all = light_plane < -(r + slack);
     for (var k = 0u; k < 3u; k++) {
-        let len = length(es[k]);
+        let len = length(e[k]);
         // An edge through o (zero-length normal): o sees the triangle edge-on.
         if (len == 0.0) {
-            return 0u;
+            return 1u;
         }
-        let dist = dot(es[k], l - o) / len;
+        e[k] = e[k] / len;
+        let dist = dot(e[k], l - o);
         if (dist < -(r + slack)) {
-            return 0u;
+            return 1u;
         }
-        let whole = dist > r + slack;
-        inside_all = inside_all && whole;
-        test[k] = !whole;
+        inside_all = inside_all && dist > r + slack;
     }
     // Hits within eps of o can only come from a plane that close to it.
-    let near = abs(d_o) < eps * n_len;
+    let near = abs(d_o) < cone.eps * n_len;
     if (inside_all && !near) {
         for (var w = 0u; w < words; w++) {
-            mask[w] = FULL;
+            fill_word(w);
         }
-        return 2u;
+        return 3u;
     }
+    let e0 = e[0];
+    let e1 = e[1];
+    let e2 = e[2];
+    let n_samples = settings.counts.x;
     for (var w = 0u; w < words; w++) {
         var bits = mask[w];
         if (bits == FULL) {
+            continue;
+        }
+        let word = samples[n_samples + first_word + w].position;
+        let center = word.xyz;
+        let reach = word.w + slack;
+        let de = vec3<f32>(dot(e0, center - o), dot(e1, center - o), dot(e2, center - o));
+        let dp = dot(h, center - a);
+        if (any(de < vec3<f32>(-reach)) || dp > reach) {
+            continue;
+        }
+        // The planes that cut the word's ball; the rest hold it whole.
+        let cut = de <= vec3<f32>(reach);
+        let cut_plane = dp >= -reach;
+        if (!any(cut) && !cut_plane && !near) {
+            fill_word(w);
             continue;
         }
         for (var k = 0u; k < 32u; k++) {
@@ -391,137 +466,207 @@ fn occlude(o: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, base: u32, wo
             if ((bits & bit) != 0u) {
                 continue;
             }
-            let s = samples[base + 32u * w + k].position.xyz;
+            let s = samples[32u * (first_word + w) + k].position.xyz;
             let x = s - o;
-            var hidden = (!test.x || dot(e0, x) >= 0.0) && (!test.y || dot(e1, x) >= 0.0) && (!test.z || dot(e2, x) >= 0.0);
-            if (hidden && !beyond_all) {
-                hidden = side * dot(n, s - a) < 0.0;
+            var hidden = (!cut.x || dot(e0, x) >= 0.0) && (!cut.y || dot(e1, x) >= 0.0) && (!cut.z || dot(e2, x) >= 0.0);
+            let d_s = dot(h, s - a);
+            if (hidden && cut_plane) {
+                hidden = d_s < 0.0;
             }
             if (hidden && near) {
-                // The hit's distance from o along the segment: |x| d_o / (d_o - d_s) >= eps.
-                let d_s = dot(n, s - a);
-                hidden = abs(d_o) * length(x) >= eps * abs(d_o - d_s);
+                // The hit's distance from o along the segment, |x| d_o / (d_o - d_s)
+                // with d_o = dot(h, o - a) > 0 > d_s, at least eps.
+                let h_o = dot(h, o - a);
+                hidden = length(x) * h_o >= cone.eps * (h_o - d_s);
             }
             if (hidden) {
                 bits |= bit;
             }
         }
+        if (bits == FULL) {
+            open_words -= 1u;
+        }
         mask[w] = bits;
     }
-    return 1u;
+    return 2u;
 }
 
-fn chunk_full(words: u32) -> bool {
-    for (var w = 0u; w < words; w++) {
-        if (mask[w] != FULL) {
-            return false;
-        }
-    }
-    return true;
-}
-
-// The visibility of the light from a pixel: per chunk of samples, the mask
-// (samples below the horizon, or of no weight, set from the start), every
-// listed triangle's hidden samples ORed in until the mask is full, then
-// the weighted sum of the samples left over the weighted sum of all.
-fn pixel_visibility(pixel: ScreenPixel, first: u32, count: u32, listed: bool, work: ptr<function, PixelWork>) -> f32 {
-    let eps = settings.offset.x;
-    let o = pixel.p + pixel.n * eps;
+// Chunk setup: the pixel's mask of the chunk of `words` words from word
+// `first_word`, samples below the horizon or of no weight set from the
+// start (raytraced's rule); `open_words` counts the words not full.
+fn start_chunk(pixel: ScreenPixel, first_word: u32, words: u32) {
     let n_samples = settings.counts.x;
-    var seen = 0.0;
-    var total = 0.0;
-    (*work).ended_early = true;
-    for (var base = 0u; base < n_samples; base += 32u * CHUNK_WORDS) {
-        let used = min(n_samples - base, 32u * CHUNK_WORDS);
-        let words = (used + 31u) / 32u;
-        for (var w = 0u; w < words; w++) {
-            let in_word = min(used - 32u * w, 32u);
-            var bits = unused_bits(in_word);
-            for (var k = 0u; k < in_word; k++) {
-                let s = samples[base + 32u * w + k];
-                // Samples below the surface's horizon count as hidden (raytraced's rule).
-                if (sample_weight(s, pixel.p) <= 0.0 || !(dot(pixel.n, s.position.xyz - pixel.p) > 0.0)) {
-                    bits |= 1u << k;
-                }
-            }
-            mask[w] = bits;
-        }
-        var k = 0u;
-        var full = chunk_full(words);
-        for (; k < count && !full; k++) {
-            var i = first + k;
-            if (listed) {
-                i = tile_list[first + k];
-            }
-            let kind = occlude(o, corner(i, 0u), corner(i, 1u), corner(i, 2u), base, words, eps);
-            if (kind != 0u) {
-                if (kind == 1u) {
-                    (*work).per_sample += 1u;
-                }
-                full = chunk_full(words);
+    open_words = 0u;
+    for (var w = 0u; w < words; w++) {
+        let base = 32u * (first_word + w);
+        let in_word = min(n_samples - base, 32u);
+        var bits = unused_bits(in_word);
+        for (var k = 0u; k < in_word; k++) {
+            let s = samples[base + k];
+            if (sample_weight(s, pixel.p) <= 0.0 || !(dot(pixel.n, s.position.xyz - pixel.p) > 0.0)) {
+                bits |= 1u << k;
             }
         }
-        (*work).pairs += k;
-        (*work).ended_early = (*work).ended_early && full && k < count;
-        for (var w = 0u; w < words; w++) {
-            let in_word = min(used - 32u * w, 32u);
-            for (var b = 0u; b < in_word; b++) {
-                let s = samples[base + 32u * w + b];
-                let weight = sample_weight(s, pixel.p);
-                if (weight > 0.0) {
-                    total += weight;
-                    if ((mask[w] & (1u << b)) == 0u) {
-                        seen += weight;
-                    }
-                }
+        mask[w] = bits;
+        if (bits != FULL) {
+            open_words += 1u;
+        }
+    }
+}
+
+// Chunk end: the weights of the chunk's samples left (x) and of all (y).
+fn end_chunk(pixel: ScreenPixel, first_word: u32, words: u32) -> vec2<f32> {
+    let n_samples = settings.counts.x;
+    var sums = vec2<f32>(0.0, 0.0);
+    for (var w = 0u; w < words; w++) {
+        let base = 32u * (first_word + w);
+        let in_word = min(n_samples - base, 32u);
+        for (var b = 0u; b < in_word; b++) {
+            let weight = sample_weight(samples[base + b], pixel.p);
+            if (weight > 0.0) {
+                sums += vec2<f32>(select(0.0, weight, (mask[w] & (1u << b)) == 0u), weight);
             }
         }
     }
-    // No sample faces the pixel (only possible with very few samples): the
-    // light is treated as hidden rather than dividing by zero (raytraced's rule).
-    return select(0.0, clamp(seen / total, 0.0, 1.0), total > 0.0);
+    return sums;
 }
 
 var<workgroup> wg_pairs: atomic<u32>;
 var<workgroup> wg_per_sample: atomic<u32>;
 var<workgroup> wg_early: atomic<u32>;
+var<workgroup> wg_past_cone: atomic<u32>;
+// The tile's list: first entry, length, whether listed (1) or every triangle (0).
+var<workgroup> wg_list: vec3<u32>;
+// Pixels of the workgroup whose chunk's mask is not yet full.
+var<workgroup> wg_open: atomic<u32>;
+// A batch of the list: the triangles and, per triangle, the bits of the
+// 4 x 4-pixel quarters whose receivers it can shadow.
+var<workgroup> wg_batch: array<u32, 64>;
+var<workgroup> wg_quarters: array<u32, 64>;
+var<workgroup> wg_quarter_box: array<Bounds, 4>;
 
+// One workgroup per 8 x 8 pixels (a quarter of a tile). The tile's list is
+// culled again, 64 triangles at a time, against the receiver boxes of the
+// workgroup's four 4 x 4-pixel quarters (`can_shadow`, one invocation per
+// triangle); every pixel then tests the triangles its quarter keeps, until
+// its mask is full. Per chunk of samples: the mask, the batches, the sums.
 @compute @workgroup_size(8, 8)
-fn masks(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+fn masks(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let pixel = screen_pixel(id);
-    if (pixel.inside) {
-        var v = 0.0;
-        if (pixel.geometry) {
-            let tiles = tile_count();
-            let tile = vec2<u32>(pixel.px) / TILE;
-            let t = tile.y * settings.tiles.x + tile.x;
-            var first = 0u;
-            var count = settings.counts.y;
-            var listed = false;
-            if (settings.counts.w == 1u) {
-                let start = atomicLoad(&bins[tiles + 2u * t]);
-                let n = atomicLoad(&bins[tiles + 2u * t + 1u]);
-                // An overflowed tile's list was not written: every triangle instead.
-                if (saturating_add(start, n) <= settings.counts.z) {
-                    first = start;
-                    count = n;
-                    listed = true;
-                }
-            }
-            var work = PixelWork(0u, 0u, false);
-            v = pixel_visibility(pixel, first, count, listed, &work);
-            atomicAdd(&wg_pairs, work.pairs);
-            atomicAdd(&wg_per_sample, work.per_sample);
-            if (work.ended_early) {
-                atomicAdd(&wg_early, 1u);
+    let receiver = pixel.inside && pixel.geometry;
+    let quarter = lid.x / 4u + 2u * (lid.y / 4u);
+    // The quarters' receiver boxes: each pixel's point, then 4 serial reductions.
+    wg_lo[li] = select(vec4<f32>(BIG, BIG, BIG, 0.0), vec4<f32>(pixel.p, 0.0), receiver);
+    wg_hi[li] = select(vec4<f32>(-BIG, -BIG, -BIG, 0.0), vec4<f32>(pixel.p, 1.0), receiver);
+    if (li == 0u) {
+        let tiles = tile_count();
+        let tile = id.xy / TILE;
+        let t = tile.y * settings.tiles.x + tile.x;
+        var list = vec3<u32>(0u, settings.counts.y, 0u);
+        if (settings.counts.w == 1u && t < tiles) {
+            let start = atomicLoad(&bins[tiles + 2u * t]);
+            let n = atomicLoad(&bins[tiles + 2u * t + 1u]);
+            // An overflowed tile's list was not written: every triangle instead.
+            if (saturating_add(start, n) <= settings.counts.z) {
+                list = vec3<u32>(start, n, 1u);
             }
         }
+        wg_list = list;
+    }
+    workgroupBarrier();
+    if (li < 4u) {
+        var lo = vec4<f32>(BIG, BIG, BIG, 0.0);
+        var hi = vec4<f32>(-BIG, -BIG, -BIG, 0.0);
+        let corner_px = vec2<u32>(li % 2u, li / 2u) * 4u;
+        for (var k = 0u; k < 16u; k++) {
+            let j = (corner_px.y + k / 4u) * 8u + corner_px.x + k % 4u;
+            lo = min(lo, wg_lo[j]);
+            hi = max(hi, wg_hi[j]);
+        }
+        wg_quarter_box[li] = Bounds(lo, hi);
+    }
+    let list = workgroupUniformLoad(&wg_list);
+    let eps = settings.offset.x;
+    let cone = pixel_cone(pixel.p + pixel.n * eps, eps);
+    let n_words = (settings.counts.x + 31u) / 32u;
+    var work = PixelWork(0u, 0u, 0u, true);
+    var sums = vec2<f32>(0.0, 0.0);
+    for (var first_word = 0u; first_word < n_words; first_word += CHUNK_WORDS) {
+        let words = min(n_words - first_word, CHUNK_WORDS);
+        open_words = 0u;
+        if (receiver) {
+            start_chunk(pixel, first_word, words);
+        }
+        var tested = 0u;
+        for (var batch = 0u; batch < list.y; batch += 64u) {
+            // Every pixel's mask full: the rest of the list hides nothing new.
+            atomicStore(&wg_open, 0u);
+            workgroupBarrier();
+            if (open_words > 0u) {
+                atomicAdd(&wg_open, 1u);
+            }
+            let j = batch + li;
+            var bits = 0u;
+            var i = 0u;
+            if (j < list.y) {
+                i = list.x + j;
+                if (list.z == 1u) {
+                    i = tile_list[list.x + j];
+                }
+                let a = corner(i, 0u);
+                let b = corner(i, 1u);
+                let c = corner(i, 2u);
+                let ball = triangles[4u * i];
+                for (var q = 0u; q < 4u; q++) {
+                    let box = wg_quarter_box[q];
+                    if (box.hi.w > 0.0 && can_shadow(a, b, c, ball, box)) {
+                        bits |= 1u << q;
+                    }
+                }
+            }
+            wg_batch[li] = i;
+            wg_quarters[li] = bits;
+            if (workgroupUniformLoad(&wg_open) == 0u) {
+                break;
+            }
+            let in_batch = min(list.y - batch, 64u);
+            for (var e = 0u; e < in_batch && open_words > 0u; e++) {
+                if ((wg_quarters[e] & (1u << quarter)) == 0u) {
+                    continue;
+                }
+                tested += 1u;
+                let kind = occlude(cone, wg_batch[e], first_word, words);
+                work.past_cone += u32(kind != 0u);
+                work.per_sample += u32(kind == 2u);
+            }
+            workgroupBarrier();
+        }
+        work.pairs += tested;
+        // Ended early: the mask filled with triangles of its quarter's list left.
+        work.ended_early = work.ended_early && open_words == 0u;
+        if (receiver) {
+            sums += end_chunk(pixel, first_word, words);
+        }
+    }
+    if (receiver) {
+        // No sample faces the pixel (only possible with very few samples): the
+        // light is treated as hidden rather than dividing by zero (raytraced's rule).
+        let v = select(0.0, clamp(sums.x / sums.y, 0.0, 1.0), sums.y > 0.0);
         textureStore(visibility_out, pixel.px, vec4<f32>(v, 0.0, 0.0, 0.0));
+        atomicAdd(&wg_pairs, work.pairs);
+        atomicAdd(&wg_per_sample, work.per_sample);
+        atomicAdd(&wg_past_cone, work.past_cone);
+        if (work.ended_early && list.y > 0u) {
+            atomicAdd(&wg_early, 1u);
+        }
+    } else if (pixel.inside) {
+        textureStore(visibility_out, pixel.px, vec4<f32>(0.0, 0.0, 0.0, 0.0));
     }
     workgroupBarrier();
     if (li == 0u) {
         add_wide(2u, atomicLoad(&wg_pairs));
         add_wide(4u, atomicLoad(&wg_per_sample));
         atomicAdd(&counters[6], atomicLoad(&wg_early));
+        add_wide(8u, atomicLoad(&wg_past_cone));
     }
 }

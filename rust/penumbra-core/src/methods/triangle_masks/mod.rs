@@ -35,14 +35,14 @@
 //! - Pixels stop at a full mask (early out); tiles no triangle can shadow
 //!   test none.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::methods::raytraced::{SampleUniform, DEFAULT_RAY_OFFSET};
-use crate::methods::reference::scene_sphere_samples;
+use crate::methods::reference::{scene_sphere_samples, LightSample};
 use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
@@ -79,8 +79,69 @@ pub struct MaskSettingsUniform {
 /// over tiles), [1] tiles overflowed, [2..4] triangle-pixel pairs tested
 /// (64 bits), [4..6] pairs tested sample by sample (64 bits), [6] pixels
 /// whose masks filled before their lists ended, [7] tiles with receivers
-/// and no triangle that can shadow them.
-const COUNTERS: usize = 8;
+/// and no triangle that can shadow them, [8..10] pairs whose triangle's
+/// bounding ball meets the pixel's cone around the light (64 bits).
+const COUNTERS: usize = 10;
+
+/// The samples in the order of their mask bits, then one ball per word of
+/// 32 (`LightSample` position: centre xyz, radius w) around its samples. The
+/// order (bits are the method's own; the set is reference's) puts nearby
+/// samples in one word, by splitting the set along its longest extent into
+/// halves of whole words, recursively: a triangle edge then cuts few words'
+/// balls, and the others are kept or set whole.
+pub fn sample_words(samples: &[LightSample]) -> Vec<SampleUniform> {
+    fn split(order: &mut [usize], samples: &[LightSample]) {
+        if order.len() <= 32 {
+            return;
+        }
+        let (lo, hi) = order.iter().fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), &i| {
+            (lo.min(samples[i].position), hi.max(samples[i].position))
+        });
+        let extent = hi - lo;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z { 0 } else if extent.y >= extent.z { 1 } else { 2 };
+        order.sort_by(|&i, &j| samples[i].position[axis].total_cmp(&samples[j].position[axis]));
+        // The first half holds whole words.
+        let middle = 32 * order.len().div_ceil(64);
+        let (left, right) = order.split_at_mut(middle);
+        split(left, samples);
+        split(right, samples);
+    }
+    let mut order: Vec<usize> = (0..samples.len()).collect();
+    split(&mut order, samples);
+    let mut out: Vec<SampleUniform> = order.iter().map(|&i| SampleUniform::from(&samples[i])).collect();
+    let balls: Vec<SampleUniform> = out
+        .chunks(32)
+        .map(|word| {
+            let points: Vec<DVec3> = word.iter().map(|s| DVec3::new(s.position[0] as f64, s.position[1] as f64, s.position[2] as f64)).collect();
+            // Chunks are never empty: the division is by 1 to 32.
+            let center = points.iter().copied().sum::<DVec3>() / points.len() as f64;
+            let reach = points.iter().map(|p| (*p - center).length()).fold(0.0, f64::max);
+            // Widened past the rounding of the centre to float32.
+            let radius = reach * (1.0 + 1e-6) + 1e-6 * center.abs().max_element();
+            let c = center.as_vec3();
+            SampleUniform { position: [c.x, c.y, c.z, radius as f32], normal: [0.0; 4] }
+        })
+        .collect();
+    out.extend(balls);
+    out
+}
+
+/// Per triangle (corners three by three): its bounding ball around the
+/// centroid (xyz, radius w, widened past float32 rounding of the centre),
+/// then its corners.
+pub fn triangle_records(corners: &[Vec3]) -> Vec<[f32; 4]> {
+    corners
+        .chunks_exact(3)
+        .flat_map(|t| {
+            let p = [t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()];
+            let m = (p[0] + p[1] + p[2]) / 3.0;
+            let reach = p.iter().map(|q| (*q - m).length()).fold(0.0, f64::max);
+            let radius = (reach * (1.0 + 1e-6) + 1e-6 * m.abs().max_element()) as f32;
+            let c = m.as_vec3();
+            [[c.x, c.y, c.z, radius], [t[0].x, t[0].y, t[0].z, 0.0], [t[1].x, t[1].y, t[1].z, 0.0], [t[2].x, t[2].y, t[2].z, 0.0]]
+        })
+        .collect()
+}
 
 pub struct TriangleMasks {
     pass: ScreenPass,
@@ -162,9 +223,9 @@ impl Method for TriangleMasks {
         let scene = ctx.prepared;
         let (center, radius) = (ctx.light.center, ctx.light.radius);
         let samples = scene_sphere_samples(center, radius, scene, params.n_samples, params.seed);
-        let uploaded: Vec<SampleUniform> = samples.iter().map(SampleUniform::from).collect();
-        let corners: Vec<[f32; 4]> = ctx.corner_positions().iter().map(|c: &Vec3| [c.x, c.y, c.z, 0.0]).collect();
-        let triangles = corners.len() / 3;
+        let uploaded = sample_words(&samples);
+        let corners = triangle_records(ctx.corner_positions());
+        let triangles = corners.len() / 4;
         let triangle_bytes = std::mem::size_of_val(corners.as_slice()) as u64;
         check_buffer(device, &format!("the scene's {triangles} triangles"), triangle_bytes, "the triangle count (decimate the meshes)")?;
         let (w, h) = ctx.size;
@@ -201,7 +262,7 @@ impl Method for TriangleMasks {
         let sample_buffer = ctx.buffer("triangle_masks::samples", std::mem::size_of_val(uploaded.as_slice()) as u64, storage);
         ctx.queue.write_buffer(&sample_buffer, 0, bytemuck::cast_slice(&uploaded));
         // A storage binding may not be empty: one zeroed triangle stands for none.
-        let triangle_buffer = ctx.buffer("triangle_masks::triangles", triangle_bytes.max(48), storage);
+        let triangle_buffer = ctx.buffer("triangle_masks::triangles", triangle_bytes.max(64), storage);
         if !corners.is_empty() {
             ctx.queue.write_buffer(&triangle_buffer, 0, bytemuck::cast_slice(&corners));
         }
@@ -266,6 +327,7 @@ impl Method for TriangleMasks {
         frame.stat("tiles_unshadowed", count(7));
         frame.stat("triangle_pixel_pairs", wide(2));
         frame.stat("pairs_tested_per_sample", wide(4));
+        frame.stat("pairs_past_cone", wide(8));
         frame.stat("pixels_ended_early", count(6));
         Ok(MethodOutput { visibility })
     }
