@@ -109,7 +109,14 @@ pub fn sample_words(samples: &[LightSample]) -> Vec<SampleUniform> {
     let mut order: Vec<usize> = (0..samples.len()).collect();
     split(&mut order, samples);
     let mut out: Vec<SampleUniform> = order.iter().map(|&i| SampleUniform::from(&samples[i])).collect();
-    let balls: Vec<SampleUniform> = out
+    let balls = sample_words_in_order(&out);
+    out.extend(balls);
+    out
+}
+
+/// One ball per word of 32 samples in the order given, around its samples.
+fn sample_words_in_order(samples: &[SampleUniform]) -> Vec<SampleUniform> {
+    samples
         .chunks(32)
         .map(|word| {
             let points: Vec<DVec3> = word.iter().map(|s| DVec3::new(s.position[0] as f64, s.position[1] as f64, s.position[2] as f64)).collect();
@@ -121,9 +128,7 @@ pub fn sample_words(samples: &[LightSample]) -> Vec<SampleUniform> {
             let c = center.as_vec3();
             SampleUniform { position: [c.x, c.y, c.z, radius as f32], normal: [0.0; 4] }
         })
-        .collect();
-    out.extend(balls);
-    out
+        .collect()
 }
 
 /// Per triangle (corners three by three): its bounding ball around the
@@ -330,5 +335,55 @@ impl Method for TriangleMasks {
         frame.stat("pairs_past_cone", wide(8));
         frame.stat("pixels_ended_early", count(6));
         Ok(MethodOutput { visibility })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::methods::reference::sphere_samples;
+
+    #[test]
+    fn sample_words_reorder_the_samples_and_their_balls_hold_them() {
+        for n in [1, 16, 261, 1032, 4129] {
+            let samples = sphere_samples(DVec3::new(1.0, 5.0, 0.0), 0.5, DVec3::NEG_Y, -0.3, n, 7);
+            let words = samples.len().div_ceil(32);
+            let out = sample_words(&samples);
+            assert_eq!(out.len(), samples.len() + words, "{n}");
+            // The same samples (positions and weights), in another order.
+            let key = |s: &SampleUniform| s.position.map(f32::to_bits);
+            let mut given: Vec<_> = samples.iter().map(SampleUniform::from).map(|s| key(&s)).collect();
+            let mut got: Vec<_> = out[..samples.len()].iter().map(key).collect();
+            given.sort_unstable();
+            got.sort_unstable();
+            assert_eq!(given, got, "{n}");
+            for (w, ball) in out[samples.len()..].iter().enumerate() {
+                let c = Vec3::from_slice(&ball.position[..3]);
+                for s in out[32 * w..(32 * w + 32).min(samples.len())].iter() {
+                    assert!((Vec3::from_slice(&s.position[..3]) - c).length() <= ball.position[3], "{n}: word {w}");
+                }
+            }
+            if n >= 261 {
+                // Coherent: the words' balls are smaller than those of the
+                // samples' own order (rows of the strata, across the light).
+                let mean = |balls: &[SampleUniform]| balls.iter().map(|b| b.position[3]).sum::<f32>() / words as f32;
+                let unordered: Vec<SampleUniform> = samples.iter().map(SampleUniform::from).collect();
+                let rows = sample_words_in_order(&unordered);
+                let (ordered, plain) = (mean(&out[samples.len()..]), mean(&rows));
+                assert!(ordered < 0.8 * plain, "{n}: {ordered} vs {plain}");
+            }
+        }
+    }
+
+    #[test]
+    fn triangle_records_hold_the_corners_in_their_balls() {
+        let corners = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 1e6)];
+        let r = triangle_records(&corners);
+        assert_eq!(r.len(), 4);
+        let c = Vec3::from_slice(&r[0][..3]);
+        for (k, p) in corners.iter().enumerate() {
+            assert_eq!(Vec3::from_slice(&r[k + 1][..3]), *p);
+            assert!((*p - c).length() <= r[0][3]);
+        }
     }
 }
