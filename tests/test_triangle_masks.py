@@ -151,14 +151,14 @@ def test_binning_drops_no_triangle_and_culls(renderer: penumbra.Renderer) -> Non
 
 
 def test_more_samples_than_one_chunk_and_seeds(renderer: penumbra.Renderer) -> None:
-    """Over 1024 samples (two chunks of the mask): the same image as the
-    truth at that count; seeds fix the samples."""
+    """Over 1280 samples (two chunks of the mask): the same image as
+    raytraced's at that count; seeds fix the samples."""
     scene = penumbra.scenes.get("cube_on_plane", width=32, height=32)
     a = renderer.render(scene, "triangle_masks", n_samples=16, seed=3)
     np.testing.assert_array_equal(a.visibility, renderer.render(scene, "triangle_masks", n_samples=16, seed=3).visibility)
     assert not np.array_equal(a.visibility, renderer.render(scene, "triangle_masks", n_samples=16, seed=4).visibility)
     big = renderer.render(scene, "triangle_masks", n_samples=1500)
-    assert big.stats["light_samples"] > 1024
+    assert big.stats["light_samples"] > 1280
     check_images(big)
     if renderer.adapter_info.get("ray_queries"):
         rays = renderer.render(scene, "raytraced", n_samples=1500)

@@ -1,4 +1,5 @@
 #import shaders/receiver.wgsl
+#import shaders/light_samples.wgsl
 
 // Method `triangle_masks` (Sintorn, Eisemann & Assarsson 2008): per pixel, a
 // bitmask over the light samples of `reference`'s sphere sampling; every
@@ -29,14 +30,6 @@ struct MaskSettings {
     dispatch: vec4<u32>,
 };
 
-struct LightSample {
-    // xyz: the point on the light; w: its weight (methods/reference/mod.rs, LightSample).
-    position: vec4<f32>,
-    // xyz: the sphere's outward unit normal there; w = 1: weight by solid
-    // angle, 0: equal weights (a point light).
-    normal: vec4<f32>,
-};
-
 // A box of receiver points; hi.w = 1 when it holds any (else it is empty).
 struct Bounds {
     lo: vec4<f32>,
@@ -62,9 +55,10 @@ struct Bounds {
 
 const TILE: u32 = 16u;
 const GROUP: u32 = 8u;
-// Light samples per pass over a pixel's triangles: 32 words of the mask in
-// private memory; more samples take more passes.
-const CHUNK_WORDS: u32 = 32u;
+// Light samples per pass over a pixel's triangles: 40 words of the mask in
+// private memory (1280 samples: n_samples = 1024 gives 1032, one pass);
+// more samples take more passes.
+const CHUNK_WORDS: u32 = 40u;
 const BIG: f32 = 3.0e38;
 const FULL: u32 = 0xFFFFFFFFu;
 
@@ -301,21 +295,6 @@ fn scan_bins(@builtin(local_invocation_index) li: u32) {
     }
 }
 
-// The weight of sample s for a receiver at p: raytraced's sample_weight
-// (methods/raytraced/visibility.wgsl), the same as reference's.
-fn sample_weight(s: LightSample, p: vec3<f32>) -> f32 {
-    if (s.normal.w == 0.0) {
-        return s.position.w;
-    }
-    let to_p = p - s.position.xyz;
-    // Receivers lie outside the light (scene validation), so |p - s| > 0;
-    // the floor only keeps a degenerate input finite.
-    let l = max(length(to_p), 1e-30);
-    let cos_s = dot(s.normal.xyz, to_p) / l;
-    let ratio = length(p - settings.light.xyz) / l;
-    return s.position.w * max(cos_s, 0.0) * ratio * ratio;
-}
-
 // A word's bits past the chunk's end (`used` samples in it, 1 to 32) count as set.
 fn unused_bits(used: u32) -> u32 {
     return select(~((1u << used) - 1u), 0u, used >= 32u);
@@ -503,7 +482,10 @@ fn start_chunk(pixel: ScreenPixel, first_word: u32, words: u32) {
         var bits = unused_bits(in_word);
         for (var k = 0u; k < in_word; k++) {
             let s = samples[base + k];
-            if (sample_weight(s, pixel.p) <= 0.0 || !(dot(pixel.n, s.position.xyz - pixel.p) > 0.0)) {
+            // No weight (the sphere's far side: sample_weight's cos_s <= 0,
+            // without its lengths), or below the horizon (raytraced's rule).
+            let facing = s.normal.w == 0.0 || dot(s.normal.xyz, pixel.p - s.position.xyz) > 0.0;
+            if (!facing || !(dot(pixel.n, s.position.xyz - pixel.p) > 0.0)) {
                 bits |= 1u << k;
             }
         }
@@ -522,7 +504,7 @@ fn end_chunk(pixel: ScreenPixel, first_word: u32, words: u32) -> vec2<f32> {
         let base = 32u * (first_word + w);
         let in_word = min(n_samples - base, 32u);
         for (var b = 0u; b < in_word; b++) {
-            let weight = sample_weight(samples[base + b], pixel.p);
+            let weight = sample_weight(samples[base + b], pixel.p, settings.light.xyz);
             if (weight > 0.0) {
                 sums += vec2<f32>(select(0.0, weight, (mask[w] & (1u << b)) == 0u), weight);
             }

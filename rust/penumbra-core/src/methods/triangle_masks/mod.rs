@@ -37,7 +37,7 @@
 
 use glam::{DVec3, Vec3};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::frame::Frame;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
@@ -152,23 +152,6 @@ pub struct TriangleMasks {
     pass: ScreenPass,
 }
 
-/// The largest storage buffer this adapter binds.
-fn buffer_limit(device: &wgpu::Device) -> u64 {
-    let limits = device.limits();
-    (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size)
-}
-
-/// Refuses a buffer beyond the adapter's limit, naming what it holds and what to reduce.
-fn check_buffer(device: &wgpu::Device, what: &str, bytes: u64, reduce: &str) -> Result<()> {
-    let limit = buffer_limit(device);
-    if bytes > limit {
-        return Err(Error::InvalidParameter(format!(
-            "method 'triangle_masks': {what} would take {bytes} bytes, beyond this adapter's storage-buffer limit of {limit}; reduce {reduce}"
-        )));
-    }
-    Ok(())
-}
-
 impl Method for TriangleMasks {
     const NAME: &'static str = "triangle_masks";
     const PAPER: &'static str = "per-triangle light-sample masks (Sintorn, Eisemann & Assarsson 2008, section 3), \
@@ -224,7 +207,6 @@ impl Method for TriangleMasks {
     /// `fill_bins` and `masks`; without binning, `masks` alone.
     fn record(&self, frame: &mut Frame<'_>, params: &TriangleMaskParams) -> Result<MethodOutput> {
         let ctx = &frame.ctx;
-        let device = ctx.device;
         let scene = ctx.prepared;
         let (center, radius) = (ctx.light.center, ctx.light.radius);
         let samples = scene_sphere_samples(center, radius, scene, params.n_samples, params.seed);
@@ -232,15 +214,15 @@ impl Method for TriangleMasks {
         let corners = triangle_records(ctx.corner_positions());
         let triangles = corners.len() / 4;
         let triangle_bytes = std::mem::size_of_val(corners.as_slice()) as u64;
-        check_buffer(device, &format!("the scene's {triangles} triangles"), triangle_bytes, "the triangle count (decimate the meshes)")?;
+        ctx.check_buffer(Self::NAME, &format!("the scene's {triangles} triangles"), triangle_bytes, "the triangle count (decimate the meshes)")?;
         let (w, h) = ctx.size;
         let tiles = (w.div_ceil(TILE), h.div_ceil(TILE));
         let groups = (tiles.0.div_ceil(GROUP), tiles.1.div_ceil(GROUP));
         let tile_count = tiles.0 as u64 * tiles.1 as u64;
-        check_buffer(device, &format!("the bins of {tile_count} tiles"), 12 * tile_count, "the image size")?;
+        ctx.check_buffer(Self::NAME, &format!("the bins of {tile_count} tiles"), 12 * tile_count, "the image size")?;
         // Entries the tile lists may hold (the largest list buffer this
         // adapter binds); beyond it a tile takes every triangle.
-        let capacity = (buffer_limit(device) / 4).min(u32::MAX as u64) as u32;
+        let capacity = (ctx.max_storage_buffer() / 4).min(u32::MAX as u64) as u32;
         // raytraced's offset: the G-buffer's float32 positions are within
         // rounding of the surface at the scale of the scene's coordinates.
         let extent = (scene.bounds_max - scene.bounds_min).max_element() as f64;
