@@ -157,9 +157,17 @@ fn can_shadow(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, ball: vec4<f32>, box: Bo
     if (any(t_lo > hi) || any(t_hi < lo)) {
         return false;
     }
-    let n = cross(b - a, c - a);
-    let n_len = length(n);
+    // The normal from the edges scaled to at most 1 (so that neither the
+    // cross product nor its length overflows float32 at any scene scale).
+    let e1 = b - a;
+    let e2 = c - a;
+    let longest = max(max(abs(e1.x), max(abs(e1.y), abs(e1.z))), max(abs(e2.x), max(abs(e2.y), abs(e2.z))));
     // A zero-area triangle hides nothing (`occlude` needs a strict crossing of its plane).
+    if (longest == 0.0) {
+        return false;
+    }
+    let n = cross(e1 / longest, e2 / longest);
+    let n_len = length(n);
     if (n_len == 0.0) {
         return false;
     }
@@ -359,27 +367,36 @@ fn fill_word(w: u32) {
 // Returns 0 (culled by the cone), 1 (culled by a plane of the light),
 // 2 (tested per word or sample) or 3 (every bit set).
 fn occlude(cone: Cone, i: u32, first_word: u32, words: u32) -> u32 {
-    let l = settings.light.xyz;
-    let r = settings.light.w;
     let o = cone.o;
-    let slack = cone.slack;
     // The ball (m, rho) meets the cone only if its centre is within rho of
     // it: perp cos(a) - along sin(a) is at most m's distance to the cone
     // (to its apex behind o), and the segments end within r beyond l.
     let ball = triangles[4u * i];
     let v = ball.xyz - o;
     let along = dot(v, cone.axis);
-    let perp = sqrt(max(dot(v, v) - along * along, 0.0));
-    let rho = ball.w + slack;
-    if (perp * cone.cos_a - along * cone.sin_a > rho || along < -rho || along > cone.distance + r + rho) {
+    // |v x axis|, not sqrt(|v|^2 - along^2): that difference cancels near
+    // the axis, and its square root turns 1e-7 of rounding into 3e-4.
+    let perp = length(cross(v, cone.axis));
+    let rho = ball.w + cone.slack;
+    if (perp * cone.cos_a - along * cone.sin_a > rho || along < -rho || along > cone.distance + settings.light.w + rho) {
         return 0u;
     }
-    let a = triangles[4u * i + 1u].xyz;
-    let b = triangles[4u * i + 2u].xyz;
-    let c = triangles[4u * i + 3u].xyz;
+    // From here on, coordinates are relative to o in units of |l - o|: every
+    // value is then of the order of 1, so no cross product or length
+    // overflows or underflows float32 at any scene scale (1e10 squared
+    // twice is past its range). o is the origin; the light's centre is the
+    // cone's axis.
+    let k = 1.0 / cone.distance;
+    let a = (triangles[4u * i + 1u].xyz - o) * k;
+    let b = (triangles[4u * i + 2u].xyz - o) * k;
+    let c = (triangles[4u * i + 3u].xyz - o) * k;
+    let l = cone.axis;
+    let r = settings.light.w * k;
+    let slack = cone.slack * k;
+    let eps = cone.eps * k;
     let n = cross(b - a, c - a);
     let n_len = length(n);
-    let d_o = dot(n, o - a);
+    let d_o = -dot(n, a);
     // o in the plane (or a zero-area triangle): no segment crosses it strictly.
     if (d_o == 0.0 || n_len == 0.0) {
         return 1u;
@@ -393,23 +410,23 @@ fn occlude(cone: Cone, i: u32, first_word: u32, words: u32) -> u32 {
     }
     // Edge planes through o, oriented so that the triangle's inside is
     // positive (det(a - o, b - o, c - o) = -d_o, the triple product), unit.
-    var e = array<vec3<f32>, 3>(cross(a - o, b - o) * -side, cross(b - o, c - o) * -side, cross(c - o, a - o) * -side);
+    var e = array<vec3<f32>, 3>(cross(a, b) * -side, cross(b, c) * -side, cross(c, a) * -side);
     var inside_all = light_plane < -(r + slack);
-    for (var k = 0u; k < 3u; k++) {
-        let len = length(e[k]);
+    for (var q = 0u; q < 3u; q++) {
+        let len = length(e[q]);
         // An edge through o (zero-length normal): o sees the triangle edge-on.
         if (len == 0.0) {
             return 1u;
         }
-        e[k] = e[k] / len;
-        let dist = dot(e[k], l - o);
+        e[q] = e[q] / len;
+        let dist = dot(e[q], l);
         if (dist < -(r + slack)) {
             return 1u;
         }
         inside_all = inside_all && dist > r + slack;
     }
     // Hits within eps of o can only come from a plane that close to it.
-    let near = abs(d_o) < cone.eps * n_len;
+    let near = abs(d_o) < eps * n_len;
     if (inside_all && !near) {
         for (var w = 0u; w < words; w++) {
             fill_word(w);
@@ -426,9 +443,9 @@ fn occlude(cone: Cone, i: u32, first_word: u32, words: u32) -> u32 {
             continue;
         }
         let word = samples[n_samples + first_word + w].position;
-        let center = word.xyz;
-        let reach = word.w + slack;
-        let de = vec3<f32>(dot(e0, center - o), dot(e1, center - o), dot(e2, center - o));
+        let center = (word.xyz - o) * k;
+        let reach = word.w * k + slack;
+        let de = vec3<f32>(dot(e0, center), dot(e1, center), dot(e2, center));
         let dp = dot(h, center - a);
         if (any(de < vec3<f32>(-reach)) || dp > reach) {
             continue;
@@ -440,23 +457,22 @@ fn occlude(cone: Cone, i: u32, first_word: u32, words: u32) -> u32 {
             fill_word(w);
             continue;
         }
-        for (var k = 0u; k < 32u; k++) {
-            let bit = 1u << k;
+        for (var j = 0u; j < 32u; j++) {
+            let bit = 1u << j;
             if ((bits & bit) != 0u) {
                 continue;
             }
-            let s = samples[32u * (first_word + w) + k].position.xyz;
-            let x = s - o;
+            let x = (samples[32u * (first_word + w) + j].position.xyz - o) * k;
             var hidden = (!cut.x || dot(e0, x) >= 0.0) && (!cut.y || dot(e1, x) >= 0.0) && (!cut.z || dot(e2, x) >= 0.0);
-            let d_s = dot(h, s - a);
+            let d_s = dot(h, x - a);
             if (hidden && cut_plane) {
                 hidden = d_s < 0.0;
             }
             if (hidden && near) {
                 // The hit's distance from o along the segment, |x| d_o / (d_o - d_s)
                 // with d_o = dot(h, o - a) > 0 > d_s, at least eps.
-                let h_o = dot(h, o - a);
-                hidden = length(x) * h_o >= cone.eps * (h_o - d_s);
+                let h_o = -dot(h, a);
+                hidden = length(x) * h_o >= eps * (h_o - d_s);
             }
             if (hidden) {
                 bits |= bit;
