@@ -32,8 +32,13 @@
 //!   tiles: counted, offset by a prefix sum, then listed. A tile whose list
 //!   would pass the adapter's storage-buffer limit takes every triangle
 //!   (`tiles_overflowed`), never fewer.
-//! - Pixels stop at a full mask (early out); tiles no triangle can shadow
-//!   test none.
+//! - The `masks` pass culls its tile's list again per 8 x 8-pixel workgroup
+//!   against the receiver boxes of its 4 x 4-pixel quarters, and each pair
+//!   first tests the triangle's bounding ball against the pixel's cone
+//!   around the light; the samples are ordered into words of nearby samples
+//!   ([`sample_words`]) so that whole words are kept or set at once.
+//! - Pixels stop at a full mask (early out), workgroups when all of their
+//!   pixels have; tiles no triangle can shadow test none.
 
 use glam::{DVec3, Vec3};
 
