@@ -26,8 +26,8 @@ import subprocess
 import sys
 import time
 
-METHODS = ["hard", "pcf", "pcss", "reference", "pvm", "pvmf", "raytraced", "adaptive", "wedges", "backprojection"]
-PARAMS: dict[str, dict] = {"reference": {"n_samples": 16}, "raytraced": {"n_samples": 16}}
+METHODS = ["hard", "pcf", "pcss", "reference", "pvm", "pvmf", "raytraced", "adaptive", "wedges", "backprojection", "triangle_masks"]
+PARAMS: dict[str, dict] = {"reference": {"n_samples": 16}, "raytraced": {"n_samples": 16}, "triangle_masks": {"n_samples": 16}}
 
 
 def worker(sizes: list[int], repeats: int) -> dict[str, float]:

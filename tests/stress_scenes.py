@@ -22,6 +22,7 @@ CHEAPER: dict[str, dict[str, Any]] = {
     "pvmf": {"n_blur": 2},
     # 16 light samples instead of 256.
     "reference": {"n_samples": 16},
+    "triangle_masks": {"n_samples": 16},
 }
 FAST: dict[str, dict[str, Any]] = {
     m: {**({"map_size": MAP} if "map_size" in penumbra.method_info(m).defaults() else {}), **CHEAPER.get(m, {})} for m in METHODS

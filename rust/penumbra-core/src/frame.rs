@@ -262,6 +262,24 @@ impl<'r> FrameContext<'r> {
     pub fn max_texture_side(&self) -> u32 {
         self.device.limits().max_texture_dimension_2d
     }
+
+    /// The largest storage buffer the adapter binds, in bytes.
+    pub fn max_storage_buffer(&self) -> u64 {
+        let limits = self.device.limits();
+        (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size)
+    }
+
+    /// Refuses a storage buffer of `bytes` beyond the adapter's limit for
+    /// `method`, naming what it holds and what to reduce.
+    pub fn check_buffer(&self, method: &str, what: &str, bytes: u64, reduce: &str) -> Result<()> {
+        let limit = self.max_storage_buffer();
+        if bytes > limit {
+            return Err(Error::InvalidParameter(format!(
+                "method '{method}': {what} would take {bytes} bytes, beyond this adapter's storage-buffer limit of {limit}; reduce {reduce}"
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// One render in progress.

@@ -34,6 +34,7 @@ pub const FILES: &[(&str, &str)] = &[
     ("shaders/common.wgsl", include_str!("shaders/common.wgsl")),
     ("shaders/light_space.wgsl", include_str!("shaders/light_space.wgsl")),
     ("shaders/receiver.wgsl", include_str!("shaders/receiver.wgsl")),
+    ("shaders/light_samples.wgsl", include_str!("shaders/light_samples.wgsl")),
     ("passes/light_view.wgsl", include_str!("passes/light_view.wgsl")),
     ("passes/shadow_test.wgsl", include_str!("passes/shadow_test.wgsl")),
     ("passes/pcf_taps.wgsl", include_str!("passes/pcf_taps.wgsl")),
@@ -60,6 +61,7 @@ pub const FILES: &[(&str, &str)] = &[
     ("methods/backprojection/visibility.wgsl", include_str!("methods/backprojection/visibility.wgsl")),
     ("methods/backprojection/pull_push.wgsl", include_str!("methods/backprojection/pull_push.wgsl")),
     ("methods/wedges/visibility.wgsl", include_str!("methods/wedges/visibility.wgsl")),
+    ("methods/triangle_masks/masks.wgsl", include_str!("methods/triangle_masks/masks.wgsl")),
 ];
 
 const IMPORT: &str = "#import ";
@@ -191,7 +193,7 @@ macro_rules! gpu_struct {
 
 /// Every Rust struct a pass uploads for a shader, with its WGSL twin.
 pub fn gpu_structs() -> Vec<GpuStruct> {
-    use crate::methods::{adaptive, backprojection, pcf, pcss, pvm, pvmf, raytraced, reference, wedges};
+    use crate::methods::{adaptive, backprojection, pcf, pcss, pvm, pvmf, raytraced, reference, triangle_masks, wedges};
     use crate::passes::{gbuffer, shading, shadow_map, shadow_test};
     vec![
         gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
@@ -205,7 +207,8 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
         gpu_struct!(adaptive::CellCompareUniform => "CellCompare" in "methods/adaptive/compare.wgsl" { tests, cell }),
         gpu_struct!(pvm::EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" { h0, h1 }),
         gpu_struct!(raytraced::RaySettingsUniform => "RaySettings" in "methods/raytraced/visibility.wgsl" { light, offset, counts }),
-        gpu_struct!(raytraced::SampleUniform => "LightSample" in "methods/raytraced/visibility.wgsl" { position, normal }),
+        gpu_struct!(raytraced::SampleUniform => "LightSample" in "shaders/light_samples.wgsl" { position, normal }),
+        gpu_struct!(triangle_masks::MaskSettingsUniform => "MaskSettings" in "methods/triangle_masks/masks.wgsl" { light, offset, counts, tiles, dispatch }),
         gpu_struct!(pvmf::SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags }),
         gpu_struct!(pvmf::BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),
         gpu_struct!(backprojection::BackprojectionUniform => "Backprojection" in "methods/backprojection/contour.wgsl" {

@@ -23,6 +23,7 @@ pub mod pvm;
 pub mod pvmf;
 pub mod raytraced;
 pub mod reference;
+pub mod triangle_masks;
 pub mod wedges;
 
 pub use params::{ParamKind, ParamSet, ParamSpec, ParamValue};
@@ -126,11 +127,12 @@ pub static REGISTRY: &[Registered] = &[
     entry::<wedges::PenumbraWedges>(),
     entry::<backprojection::SoftShadowBackprojection>(),
     entry::<raytraced::RaytracedShadows>(),
+    entry::<triangle_masks::TriangleMasks>(),
 ];
 
 /// Every method name SPEC section 4 defines, in its order.
 pub const SPEC_METHODS: &[&str] =
-    &["hard", "pcf", "pcss", "reference", "adaptive", "pvm", "pvmf", "wedges", "backprojection", "raytraced"];
+    &["hard", "pcf", "pcss", "reference", "adaptive", "pvm", "pvmf", "wedges", "backprojection", "raytraced", "triangle_masks"];
 
 /// Every method name of SPEC section 4 with whether it is implemented.
 pub fn methods() -> Vec<(&'static str, bool)> {

@@ -339,10 +339,10 @@ impl Method for SoftShadowBackprojection {
     fn record(&self, frame: &mut Frame<'_>, params: &BackprojectionParams) -> Result<MethodOutput> {
         let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
         let layout = HierarchyLayout::new(params.shadow.map_size, projection.layers());
-        check_buffer(&frame.ctx, "the min/max hierarchy", layout.bytes(), "map_size")?;
+        frame.ctx.check_buffer("backprojection", "the min/max hierarchy", layout.bytes(), "map_size")?;
         let (w, h) = frame.ctx.size;
         let list_bytes = 16 + 4 * w as u64 * h as u64;
-        check_buffer(&frame.ctx, "the list of penumbra pixels", list_bytes, "the image size")?;
+        frame.ctx.check_buffer("backprojection", "the list of penumbra pixels", list_bytes, "the image size")?;
 
         let mut key = PassKey::new(HIERARCHY.name);
         key.key(&shadow_map::centre_map_key(&frame.ctx, &params.shadow, &projection));
@@ -437,19 +437,6 @@ impl Method for SoftShadowBackprojection {
         }
         Ok(MethodOutput { visibility })
     }
-}
-
-/// Refuses a storage buffer beyond the adapter's limits, naming what it
-/// holds and what to reduce.
-fn check_buffer(ctx: &FrameContext<'_>, what: &str, bytes: u64, reduce: &str) -> Result<()> {
-    let limits = ctx.device.limits();
-    let limit = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
-    if bytes > limit {
-        return Err(Error::InvalidParameter(format!(
-            "method 'backprojection': {what} would take {bytes} bytes, beyond this adapter's storage-buffer limit of {limit}; reduce {reduce}"
-        )));
-    }
-    Ok(())
 }
 
 impl SoftShadowBackprojection {

@@ -1,5 +1,6 @@
 enable wgpu_ray_query;
 #import shaders/receiver.wgsl
+#import shaders/light_samples.wgsl
 
 // Method `raytraced`: visibility by shadow rays through the scene's
 // acceleration structure (ray queries). Per pixel, one ray from the surface
@@ -23,14 +24,6 @@ struct RaySettings {
     counts: vec4<u32>,
 };
 
-struct LightSample {
-    // xyz: the point on the light; w: its weight (methods/reference/mod.rs, LightSample).
-    position: vec4<f32>,
-    // xyz: the sphere's outward unit normal there; w = 1: weight by solid
-    // angle, 0: equal weights (a point light).
-    normal: vec4<f32>,
-};
-
 @group(0) @binding(2) var scene_bvh: acceleration_structure;
 @group(0) @binding(3) var<storage, read> settings: RaySettings;
 @group(0) @binding(4) var<storage, read> samples: array<LightSample>;
@@ -41,24 +34,6 @@ struct LightSample {
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 // Adaptive mode: the pixels (row-major indices) that take the full sample set.
 @group(0) @binding(8) var<storage, read_write> refine_list: array<u32>;
-
-// The weight of sample s for a receiver at p: with solid-angle weights,
-// cos(theta_s) / |p - s|^2 over the sampling density (the sample's patch of
-// the sphere seen from p), scaled by |p - c|^2 to stay near 1 at any scene
-// scale; zero on the far side of the sphere, where the ray from p would
-// enter the light elsewhere first. The same as `reference`'s sample_weight_at.
-fn sample_weight(s: LightSample, p: vec3<f32>) -> f32 {
-    if (s.normal.w == 0.0) {
-        return s.position.w;
-    }
-    let to_p = p - s.position.xyz;
-    // Receivers lie outside the light (scene validation), so |p - s| > 0;
-    // the floor only keeps a degenerate input finite.
-    let l = max(length(to_p), 1e-30);
-    let cos_s = dot(s.normal.xyz, to_p) / l;
-    let ratio = length(p - settings.light.xyz) / l;
-    return s.position.w * max(cos_s, 0.0) * ratio * ratio;
-}
 
 // Whether the segment from `origin` to `end` meets no triangle beyond
 // `t_min`. The light is not in the acceleration structure, so the segment
@@ -93,7 +68,7 @@ fn estimate(pixel: ScreenPixel, first: u32, count: u32) -> f32 {
     var total = 0.0;
     for (var i = first; i < first + count; i++) {
         let s = samples[i];
-        let w = sample_weight(s, pixel.p);
+        let w = sample_weight(s, pixel.p, settings.light.xyz);
         if (w <= 0.0) {
             continue;
         }
