@@ -23,7 +23,8 @@ import numpy as np
 import penumbra
 from penumbra import rooms
 
-MESHES = Path(__file__).resolve().parents[2] / "shared" / "meshes"
+# As the tests find them (tests/stress_scenes.py): ../shared/meshes beside the checkout.
+MESHES = Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes"
 METHODS = ["pcf", "pcss", "pvm", "pvmf", "wedges", "backprojection", "adaptive", "reference"]
 # `reference` at low samples: the cheap way to the truth, beside the soft methods.
 PARAMS = {"reference": {"n_samples": 64}}
@@ -55,14 +56,22 @@ def main() -> None:
     parser.add_argument("--methods", nargs="*", default=METHODS)
     parser.add_argument("--scenes", nargs="*", help="scene names of the suite (all by default)")
     parser.add_argument("--truth-samples", type=int, default=rooms.TRUTH_SAMPLES)
+    parser.add_argument("--meshes", type=Path, default=MESHES, help="the folder of CornellBox-Original.obj (default ../shared/meshes)")
     parser.add_argument("--json", help="write every row here")
     parser.add_argument("--images", help="write every visibility image here (.npz)")
+    parser.add_argument("--truth-from", help="take the truths from the images of an earlier run (.npz of --images)")
     args = parser.parse_args()
-    cornell = MESHES / "CornellBox-Original.obj"
+    cornell = args.meshes / "CornellBox-Original.obj"
     suite = rooms.room_suite(args.size, str(cornell) if cornell.exists() else None)
     if args.scenes:
         suite = {k: v for k, v in suite.items() if k in args.scenes}
     images: dict = {}
+    if args.truth_from:
+        with np.load(args.truth_from) as saved:
+            for key in saved.files:
+                scene, method, turned = key.split("|")
+                if method in ("truth", "geometry"):
+                    images[(scene, method, bool(int(turned)))] = saved[key]
     rows = rooms.measure(penumbra.Renderer(), suite, args.methods, params=PARAMS, truth_samples=args.truth_samples, images=images)
     print(f"## {len(suite)} room scenes at {args.size}x{args.size}, truth: reference at {args.truth_samples} samples\n")
     print(table(rows))
