@@ -338,7 +338,8 @@ fn triangle_distance(t: [DVec3; 3]) -> f64 {
         return (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))).length();
     }
     let sum = va + vb + vc;
-    if !(sum > 0.0) {
+    // NaN-safe: a NaN sum (non-finite corners) also takes this branch.
+    if sum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         // Degenerate (zero area) and no region matched: its nearest corner.
         return a.length().min(b.length()).min(c.length());
     }
