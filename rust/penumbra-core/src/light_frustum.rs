@@ -69,6 +69,10 @@ pub struct LightProjection {
     pub active: u32,
     /// The point the faces look from.
     pub origin: Vec3,
+    /// Cube faces: the distance from `origin` to the nearest geometry (the
+    /// same whichever way the faces cut, unlike the near plane along each
+    /// face's axis); PCSS sizes its blocker search from it. 0 for a frustum.
+    pub nearest: f32,
 }
 
 impl LightProjection {
@@ -78,7 +82,7 @@ impl LightProjection {
     pub fn fit(origin: Vec3, points: &[Vec3], corners: &[Vec3], mode: ProjectionMode) -> Result<Self> {
         if mode != ProjectionMode::Cube {
             match LightFrustum::fit(origin, points.iter().copied()) {
-                Ok(frustum) => return Ok(Self { faces: vec![frustum], active: 1, origin }),
+                Ok(frustum) => return Ok(Self { faces: vec![frustum], active: 1, origin, nearest: 0.0 }),
                 Err(e) if mode == ProjectionMode::Frustum => return Err(e),
                 Err(_) => {}
             }
@@ -103,6 +107,10 @@ impl LightProjection {
         // plane, from which filters size their search regions (PCSS's
         // blocker search reaches across the light's projection onto it).
         let mut nearest = f64::INFINITY;
+        let mut nearest_distance = f64::INFINITY;
+        for t in corners.chunks_exact(3) {
+            nearest_distance = nearest_distance.min(triangle_distance([t[0], t[1], t[2]].map(|p| p.as_dvec3() - o)));
+        }
         for (f, (axis, up)) in (0..6).map(cube_face).enumerate() {
             let (a, b) = (axis.as_dvec3(), up.as_dvec3());
             let c = a.cross(b);
@@ -138,7 +146,8 @@ impl LightProjection {
                 LightFrustum { view, projection, window, near, far }
             })
             .collect();
-        Ok(Self { faces, active, origin })
+        // Scene validation keeps every surface off the light: the distance is positive.
+        Ok(Self { faces, active, origin, nearest: nearest_distance as f32 })
     }
 
     pub fn is_cube(&self) -> bool {
@@ -294,6 +303,49 @@ impl LightFrustum {
 /// four `planes` (Sutherland-Hodgman; each plane adds at most one corner, so
 /// seven hold the result); empty when nothing of it is left. A triangle that
 /// only touches a plane keeps the touching points.
+/// The distance from the origin to the triangle `t` (its closest point:
+/// Ericson, Real-Time Collision Detection 5.1.5, by Voronoi regions).
+fn triangle_distance(t: [DVec3; 3]) -> f64 {
+    let [a, b, c] = t;
+    let (ab, ac, ap) = (b - a, c - a, -a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a.length();
+    }
+    let bp = -b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b.length();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    // Each division below is by a positive sum of the region's barycentric
+    // terms (the tests before it exclude the zero cases); a degenerate
+    // triangle falls to its vertices or edges.
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return (a + ab * (d1 / (d1 - d3))).length();
+    }
+    let cp = -c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c.length();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return (a + ac * (d2 / (d2 - d6))).length();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))).length();
+    }
+    let sum = va + vb + vc;
+    // NaN-safe: a NaN sum (non-finite corners) also takes this branch.
+    if sum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        // Degenerate (zero area) and no region matched: its nearest corner.
+        return a.length().min(b.length()).min(c.length());
+    }
+    (a + ab * (vb / sum) + ac * (vc / sum)).length()
+}
+
 pub(crate) fn clip_to_cone(triangle: [DVec3; 3], planes: &[DVec3; 4]) -> Vec<DVec3> {
     let mut polygon = [DVec3::ZERO; 8];
     polygon[..3].copy_from_slice(&triangle);
@@ -465,5 +517,27 @@ mod tests {
             let (u, v) = (q.x / -q.z, q.y / -q.z);
             assert!(u.abs() <= 1.0 + 1e-5 && v.abs() <= 1.0 + 1e-5, "face {face}: {u} {v}");
         }
+    }
+
+    #[test]
+    fn the_cube_knows_the_distance_to_the_nearest_geometry_whichever_way_it_is_turned() {
+        // The floor 0.5 below the light, first level, then turned 40 degrees
+        // about z around the light: the distance stays 0.5 (the near plane
+        // along the faces' axes does not).
+        let origin = Vec3::new(0.3, 0.5, -0.2);
+        let level = LightProjection::cube(origin, &floor()).unwrap();
+        assert!((level.nearest - 0.5).abs() < 1e-5, "{}", level.nearest);
+        let turn = glam::Mat3::from_rotation_z(40f32.to_radians());
+        let turned: Vec<Vec3> = floor().iter().map(|p| origin + turn * (*p - origin)).collect();
+        let cube = LightProjection::cube(origin, &turned).unwrap();
+        assert!((cube.nearest - 0.5).abs() < 1e-5, "{}", cube.nearest);
+        assert!(cube.faces[0].near < 0.45, "the axis near plane moved: {}", cube.faces[0].near);
+        // Each Voronoi region of a triangle: a corner, an edge, the inside.
+        let t = [DVec3::new(1.0, 0.0, 0.0), DVec3::new(3.0, 0.0, 0.0), DVec3::new(1.0, 2.0, 0.0)];
+        let at = |p: DVec3| triangle_distance(t.map(|v| v - p));
+        assert!((at(DVec3::new(0.0, -1.0, 0.0)) - 2f64.sqrt()).abs() < 1e-12);
+        assert!((at(DVec3::new(2.0, -1.0, 0.0)) - 1.0).abs() < 1e-12);
+        assert!((at(DVec3::new(1.5, 0.5, 0.7)) - 0.7).abs() < 1e-12);
+        assert!((at(DVec3::new(3.0, 2.0, 0.0)) - 2f64.sqrt()).abs() < 1e-12);
     }
 }

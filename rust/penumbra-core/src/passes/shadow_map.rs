@@ -298,16 +298,16 @@ impl LightSpaceUniform {
     /// light point (the shader rotates into each face) and the unit window.
     pub fn new(projection: &LightProjection, map_size: u32) -> Self {
         let face = &projection.faces[0];
-        let (view, layers) = if projection.is_cube() {
-            (glam::Mat4::from_translation(-projection.origin), 6.0)
+        let (view, layers, nearest) = if projection.is_cube() {
+            (glam::Mat4::from_translation(-projection.origin), 6.0, projection.nearest.to_bits())
         } else {
-            (face.view, 1.0)
+            (face.view, 1.0, 0)
         };
         Self {
             view: super::mat4(view),
             window: face.window.to_array(),
             depth: [face.near, face.far, map_size as f32, layers],
-            faces: [projection.active, 0, 0, 0],
+            faces: [projection.active, nearest, 0, 0],
         }
     }
 }

@@ -36,7 +36,8 @@ fn pcf_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if (pcf.kernel == 0.0 && pcf.nearest == 1u) {
         return shadow_test_visibility(shadow, shadow_map, p, n);
     }
-    let r = pcf_receiver(shadow, p, n);
+    // On cube faces the kernel lies across the light's direction (pcf_frame_receiver).
+    let r = pcf_frame_receiver(shadow, p, n);
     let count = pcf.samples * pcf.samples;
     var sum = 0.0;
     for (var i = 0u; i < count; i++) {

@@ -84,30 +84,30 @@ fn disk_tap(px: vec2<u32>, i: u32, n: u32, stream: u32, rot: vec2<f32>) -> vec2<
 }
 
 // The blocker test's two depths for the texel under `c` (coordinates in the
-// receiver's layer; on a cube, beyond its edges they read the neighbour
-// face), both along the receiver layer's axis in world units: x, the
-// surface the map stores there; y, the receiver's plane along the ray
-// through that texel's centre (the ray the map sampled: along the tap's own
-// ray the plane would differ by its slope across the texel, and a plane seen
-// at a grazing angle would then find itself a blocker). A texel where
-// nothing was drawn (the far plane: beyond every surface) holds no blocker,
-// even where the ray passes above the receiver's plane's horizon.
+// receiver's layer or frame; on a cube, the face the direction falls in is
+// read), both along the receiver's axis in world units: x, the surface the
+// map stores there; y, the receiver's plane along the ray through that
+// texel's centre (the ray the map sampled: along the tap's own ray the plane
+// would differ by its slope across the texel, and a plane seen at a grazing
+// angle would then find itself a blocker). A texel where nothing was drawn
+// (the far plane: beyond every surface) holds no blocker, even where the ray
+// passes above the receiver's plane's horizon.
 fn texel_blocker(r: Receiver, c: vec2<f32>) -> vec2<f32> {
     let ls = shadow.light_space;
-    let m = map_wrap(ls, r.layer, c);
+    let m = receiver_read(ls, r, c);
     let centre = vec2<f32>(map_texel(textureDimensions(shadow_map), m)) + 0.5;
     let stored = map_point_depth(ls, shadow_map, MapPoint(m.layer, centre));
     if (stored >= ls.depth.y) {
         return vec2<f32>(1.0, 0.0);
     }
-    // The texel centre in the receiver's layer's coordinates.
+    // The texel centre in the receiver's coordinates.
     var at = centre;
-    if (m.layer != r.layer) {
-        at = view_coords(ls, layer_frame(ls, r.layer, light_ray(ls, m.layer, centre)));
+    if (r.layer < 0 || m.layer != r.layer) {
+        at = receiver_coords(ls, r, light_ray(ls, m.layer, centre));
     }
-    // The read layer's depth per unit depth along the receiver layer's axis
-    // is positive: the direction's dominant axis is the read face's.
-    let z = stored / layer_depth_scale(ls, r.layer, at, m.layer);
+    // The read layer's depth per unit depth along the receiver's axis is
+    // positive: the direction's dominant axis is the read face's.
+    let z = stored / receiver_depth_scale(ls, r, at, m.layer);
     return vec2<f32>(z, plane_depth(shadow, r, at));
 }
 
@@ -124,8 +124,15 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
         return out;
     }
     let ls = shadow.light_space;
-    let near = ls.depth.x;
-    let r = pcf_receiver(shadow, p, n);
+    // The near plane: a frustum's; on cube faces, the distance to the
+    // nearest geometry (LightProjection::nearest), which, unlike the faces'
+    // own near plane, does not depend on where they cut. Depths are then
+    // along the receiver's frame's axis (pcf_frame_receiver).
+    var near = ls.depth.x;
+    if (is_cube(ls)) {
+        near = bitcast<f32>(ls.faces.y);
+    }
+    let r = pcf_frame_receiver(shadow, p, n);
     let angle = 2.0 * PI * jitter2(px, pcss.seed, ROTATION_STREAM).x;
     let rot = vec2<f32>(cos(angle), sin(angle));
 
@@ -154,7 +161,9 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
         return out;
     }
     // blockers >= 1; every stored depth is at least near > 0 (the map covers
-    // only geometry beyond the fitted near plane), so d_b > 0.
+    // only geometry beyond the fitted near plane), so d_b > 0. On cube faces
+    // a blocker's depth along w may fall below its distance, `near`; the
+    // clamp keeps d_b > 0 there.
     let d_b = max(blocker_sum / f32(blockers), near);
     out.blocker = d_b;
 

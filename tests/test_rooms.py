@@ -1,0 +1,191 @@
+"""Rooms lit from inside (issue 31, docs/omnidirectional.md): every method
+against the truth and under a rotation of the whole scene, over the room
+suite of `penumbra.rooms` at 32x32, and the cube against the frustum along
+face boundaries.
+
+The truth here is `reference` at 256 samples with maps of 256 (the room
+suite's own truth, 1024 samples, is benchmarks/rooms.py's): at 32x32 it
+moves at most 0.3% of pixels by more than 0.1 under the rotation. Bounds
+are the measured worst over the suite with a margin (the commands in the
+comments); a failing test leaves the method's, the truth's and their
+difference's images under test-artifacts/rooms/.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra import rooms
+from stress_scenes import MESHES, check_images
+from test_projection import MAPPED, cheap, seam_scene
+from test_real_meshes import leave_images
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from omnidirectional import seam_band  # noqa: E402
+
+SIZE = 32
+TRUTH = {"truth_samples": 256, "truth_map_size": 256}
+ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts" / "rooms"
+CORNELL = MESHES / "CornellBox-Original.obj"
+# `reference` at low samples, the cheap way to the truth, beside the others.
+# Maps of 256, as the truth's (at its default 2048 it takes 30 s a render here).
+PARAMS: dict[str, dict[str, Any]] = {"reference": {"n_samples": 64, "map_size": 256}}
+
+
+@pytest.fixture(scope="module")
+def suite() -> dict[str, penumbra.Scene]:
+    return rooms.room_suite(SIZE, str(CORNELL) if CORNELL.exists() else None)
+
+
+@pytest.fixture(scope="module")
+def images(renderer: penumbra.Renderer, suite: dict[str, penumbra.Scene]) -> dict:
+    """Every scene's truth and its rotated copy's, rendered once for the module."""
+    out: dict = {}
+    rooms.measure(renderer, suite, [], images=out, **TRUTH)
+    return out
+
+
+def measured(renderer: penumbra.Renderer, suite: dict[str, penumbra.Scene], images: dict, method: str) -> list[rooms.RoomRow]:
+    rows = rooms.measure(renderer, suite, [method], params=PARAMS, images=images, **TRUTH)
+    assert len(rows) == len(suite) >= 6
+    return rows
+
+
+def check_rows(rows: list[rooms.RoomRow], images: dict, off_bound: float | None, moved_bound: float) -> None:
+    """Every row within the bounds; on failure, the images of the rows that fail are left behind."""
+    failing = [r for r in rows if r.off is None or (off_bound is not None and max(r.off, r.off_rotated) > off_bound) or r.moved > moved_bound]  # type: ignore[operator]
+    for r in failing:
+        for turned in (False, True):
+            if (r.scene, r.method, turned) in images:
+                leave_images(f"{r.method} {r.scene}{' rotated' if turned else ''}", images[(r.scene, r.method, turned)], images[(r.scene, "truth", turned)], ARTIFACTS)
+    assert not failing, [f"{r.scene}: off {r.off}, rotated {r.off_rotated}, moved {r.moved} {r.refused}" for r in failing]
+
+
+def test_the_suite_has_eight_lights_in_three_rooms(suite: dict[str, penumbra.Scene], renderer: penumbra.Renderer) -> None:
+    if not CORNELL.exists():
+        pytest.skip("../shared/meshes is absent: the Cornell box's three lights are missing")
+    assert len(suite) >= 8 and len({name.split()[0] for name in suite}) == 3
+    for name, scene in suite.items():
+        # Every light is surrounded by geometry: the maps take cube faces.
+        result = renderer.render(scene, "hard", map_size=64)
+        check_images(result, name)
+        assert result.stats["cube_map"] == 1, name
+
+
+def test_a_rotated_scene_renders_the_same_image(suite: dict[str, penumbra.Scene], renderer: penumbra.Renderer) -> None:
+    """The rotation turns the camera with the scene: the same pixels see the
+    same points (positions turned, within float error; a pixel on an edge
+    between two surfaces may see the other one)."""
+    scene = suite["room middle"]
+    a = renderer.render(scene, "hard", map_size=256)
+    b = renderer.render(rooms.rotated(scene), "hard", map_size=256)
+    turn = rooms._rotation(*rooms.ROTATION)
+    same = np.abs(a.position @ turn.T - b.position).max(axis=-1) < 1e-3
+    assert same.mean() > 0.99, same.mean()
+    assert (a.object_id == b.object_id).mean() > 0.99
+
+
+# Measured at 32x32 with this truth (rooms.measure over the suite): pcss
+# moves at most 0.3% of pixels (0.49% summed over the nine scenes) against
+# reference's 0.6% (2.4% summed; 64 samples, maps of 256), pcf at most 1.4%;
+# before the fix pcss moved up to 6.0% and pcf 3.5%. Off the truth pcss is
+# at most 7.4% (room under_shelf), except the Cornell box lit near its left
+# wall, 14.6%: there the light's sphere straddles the short block's front
+# face, which the truth sees half lit and every method of a map from the
+# light's centre sees dark (the light's horizon, not a seam; 13.8% before
+# the fix), and along the rooms' concave corners, where PCSS's blocker
+# search finds the adjacent wall. pcf (a fixed kernel, no penumbra
+# estimate) is not held to the truth.
+PCSS_OFF = {"cornell wall": 0.16}
+PCSS_OFF_ELSEWHERE = 0.08
+
+
+@pytest.mark.parametrize("method", ["pcss", "pcf"])
+def test_cube_face_filters_do_not_depend_on_where_the_faces_cut(renderer: penumbra.Renderer, suite: dict[str, penumbra.Scene], images: dict, method: str) -> None:
+    rows = measured(renderer, suite, images, method)
+    check_rows(rows, images, None, 0.02)
+    if method == "pcss":
+        for row in rows:
+            check_rows([row], images, PCSS_OFF.get(row.scene, PCSS_OFF_ELSEWHERE), 0.02)
+        reference = measured(renderer, suite, images, "reference")
+        # pcss moves no more pixels than reference at 64 samples does (its
+        # noise), over the suite.
+        assert sum(r.moved for r in rows) <= sum(r.moved for r in reference), (  # type: ignore[misc]
+            [r.moved for r in rows],
+            [r.moved for r in reference],
+        )
+
+
+@pytest.mark.xfail(strict=True, reason="pcss is off the truth by up to 14.6% of pixels (the Cornell box lit near its wall: the light's horizon) and 7.4% elsewhere")
+def test_pcss_is_within_five_percent_of_the_truth_in_every_room(renderer: penumbra.Renderer, suite: dict[str, penumbra.Scene], images: dict) -> None:
+    check_rows(measured(renderer, suite, images, "pcss"), images, 0.05, 0.02)
+
+
+# The other methods over the suite, at 32x32 (`python -m pytest
+# tests/test_rooms.py -m slow`): held to the issue's targets (off the truth
+# within 5% of pixels, moved within 2%); those that miss them fail as
+# measured (strict xfail: a fix that meets them turns the test red).
+SLOW = [
+    ("pvm", {}, None),
+    ("wedges", {}, None),
+    ("reference", {}, None),
+    ("adaptive", {}, "adaptive moves 2.3% of pixels under the rotation (room under_shelf)"),
+    ("backprojection", {}, "backprojection moves 5.0% of pixels under the rotation (room under_shelf: its contour hierarchy is per cube face)"),
+    (
+        "pvmf",
+        {},
+        "PVMF's default mask (unit offsets, 5.1) flags 70-79% of the pixels in rooms and its screen-space blur (n_blur 12 pixels) "
+        "smears the walls: off the truth by 23-28% of pixels in most rooms (see docs/omnidirectional.md)",
+    ),
+    # Scaled offsets, no blur: off the truth by 5.6% at worst at 32x32 (the
+    # Cornell box's ceiling light; 4.8% at 64x64, benchmarks/rooms.py), held
+    # to 6.5%; moved 0.2%.
+    ("pvmf", {"offsets": "radius", "n_blur": 0}, None),
+]
+# The issue's target, off the truth within 5% of pixels, but where a bound measured here says otherwise.
+OFF_BOUND = {("pvmf", "radius"): 0.065}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("method", "params", "failing"), SLOW, ids=[f"{m}{'-' + '-'.join(f'{k}={v}' for k, v in p.items()) if p else ''}" for m, p, _ in SLOW])
+def test_every_method_in_rooms(
+    renderer: penumbra.Renderer, suite: dict[str, penumbra.Scene], images: dict, method: str, params: dict[str, Any], failing: str | None, request: pytest.FixtureRequest
+) -> None:
+    if failing:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=failing))
+    rows = rooms.measure(renderer, suite, [method], params={method: {**PARAMS.get(method, {}), **params}}, images=images, **TRUTH)
+    check_rows(rows, images, OFF_BOUND.get((method, params.get("offsets", "")), 0.05), 0.02)
+
+
+@pytest.mark.parametrize("method", MAPPED)
+def test_seams_match_the_frustum_within_its_resolution_error(renderer: penumbra.Renderer, method: str) -> None:
+    """Where both projections apply (a floor whose shadow crosses the seam
+    between two cube faces), the largest difference between the cube and the
+    frustum within two texels of a face boundary is within the frustum's own
+    resolution error there (its largest difference from a map four times
+    finer), or, for methods that jitter their taps, their sampling noise
+    (seed 0 against 1), whichever is larger, plus 0.05."""
+    scene = seam_scene()
+    params = {**cheap(method), "map_size": 256}
+    if method == "reference":
+        params["n_samples"] = 64
+    frustum = renderer.render(scene, method, projection="frustum", **params)
+    cube = renderer.render(scene, method, projection="cube", **params)
+    finer = renderer.render(scene, method, projection="frustum", **{**params, "map_size": 1024})
+    band = seam_band(cube, np.asarray(scene.light.center, dtype=np.float32), 256, texels=2)
+    assert band.sum() > 20, "the seams cross the image"
+    allowance = np.abs(frustum.visibility - finer.visibility)[band].max()
+    if "seed" in penumbra.method_info(method).defaults():
+        other = renderer.render(scene, method, projection="frustum", **{**params, "seed": 1})
+        other_cube = renderer.render(scene, method, projection="cube", **{**params, "seed": 1})
+        allowance = max(allowance, np.abs(frustum.visibility - other.visibility)[band].max(), np.abs(cube.visibility - other_cube.visibility)[band].max())
+    difference = np.abs(cube.visibility - frustum.visibility)[band].max()
+    if difference > allowance + 0.05:
+        leave_images(f"seam {method}", cube.visibility, frustum.visibility, ARTIFACTS)
+    assert difference <= allowance + 0.05, (method, difference, allowance)
