@@ -209,7 +209,7 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
         gpu_struct!(raytraced::RaySettingsUniform => "RaySettings" in "methods/raytraced/visibility.wgsl" { light, offset, counts }),
         gpu_struct!(raytraced::SampleUniform => "LightSample" in "shaders/light_samples.wgsl" { position, normal }),
         gpu_struct!(triangle_masks::MaskSettingsUniform => "MaskSettings" in "methods/triangle_masks/masks.wgsl" { light, offset, counts, tiles, dispatch }),
-        gpu_struct!(pvmf::SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags }),
+        gpu_struct!(pvmf::SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags, blur_min_width }),
         gpu_struct!(pvmf::BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),
         gpu_struct!(backprojection::BackprojectionUniform => "Backprojection" in "methods/backprojection/contour.wgsl" {
             t, t_k, beta, s_min, eye, flags, levels, max_kernel, pad, level_offset, level_size
