@@ -140,9 +140,13 @@ def test_binning_drops_no_triangle_and_culls(renderer: penumbra.Renderer) -> Non
         geometry = int((binned.object_id >= 0).sum())
         assert e["triangle_pixel_pairs"] <= s["triangles"] * geometry
         # Without lists every workgroup culls every triangle itself (masks.wgsl): the pairs are as few.
-        assert s["triangle_pixel_pairs"] <= e["triangle_pixel_pairs"], name
+        # The lists are filled by atomics, so their order, and with it where a
+        # pixel's full mask stops it early, changes from render to render: the
+        # counts vary by a few pairs (measured: 24842 against 24833 on the
+        # Cornell box, 0.04%), hence the 1% slack.
+        assert s["triangle_pixel_pairs"] <= 1.01 * e["triangle_pixel_pairs"], name
         # The tiles' hull test is tighter than the pairs' cone test, never looser.
-        assert s["pairs_past_cone"] <= e["pairs_past_cone"]
+        assert s["pairs_past_cone"] <= 1.01 * e["pairs_past_cone"]
         assert s["pairs_tested_per_sample"] <= s["pairs_past_cone"] <= s["triangle_pixel_pairs"]
         assert 0 < s["triangles_binned"] < 0.5 * s["triangles"] * s["tiles"] == 0.5 * e["triangles_binned"], name
         assert s["tiles_overflowed"] == 0 and 0 <= s["pixels_ended_early"] <= geometry
