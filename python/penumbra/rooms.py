@@ -27,7 +27,7 @@ import numpy as np
 
 from penumbra.errors import MeshError
 from penumbra.scene import Camera, Mesh, Scene, SphereLight
-from penumbra.scenes import box, cornell_box
+from penumbra.scenes import box, cornell_box, inverted_box
 
 if TYPE_CHECKING:
     from penumbra.render import Renderer
@@ -58,12 +58,6 @@ TRUTH_MAP_SIZE = 512
 THRESHOLD = 0.1
 # The rotation of the whole scene: degrees about x, then about y.
 ROTATION = (30.0, 20.0)
-
-
-def inverted_box(center: tuple[float, float, float], extents: tuple[float, float, float], *, name: str = "room", object_id: int = 0) -> Mesh:
-    """A closed box whose faces point inwards: walls, floor and ceiling seen from inside."""
-    walls = box(center, extents, name=name, object_id=object_id)
-    return Mesh(walls.vertices, np.asarray(walls.faces)[:, ::-1], albedo=0.7, object_id=object_id, name=name, transform=walls.transform)
 
 
 # Lights of the 6 x 4 x 6 room (x and z in [-3, 3], y in [0, 4]): (centre, radius).

@@ -15,9 +15,13 @@ above, seen by a camera from the front and above:
 
 from __future__ import annotations
 
+import functools
 import math
+import os
 import warnings
-from typing import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
 import trimesh
@@ -42,6 +46,14 @@ __all__ = [
     "wide_floor",
     "cornell_box",
     "sponza",
+    "inverted_box",
+    "meshes_folder",
+    "GENERATOR_MESHES",
+    "GeneratedSpec",
+    "generate",
+    "generated_spec",
+    "generated_suite",
+    "GENERATED_PREFIX",
 ]
 
 DEFAULT = "sphere_on_plane"
@@ -144,10 +156,18 @@ def names() -> list[str]:
 
 
 def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = None, light_radius: float | None = None) -> Scene:
-    """Builds the built-in scene ``name``, optionally at another image size or light radius."""
-    if not isinstance(name, str) or name not in _SCENES:
-        raise ParameterError(f"unknown scene {name!r}; built-in scenes: {names()}")
-    scene = _SCENES[name]()
+    """Builds the built-in scene ``name``, optionally at another image size or
+    light radius. ``"generated:<seed>"`` is :func:`generate` ``(seed)`` (it
+    needs the shared meshes: :func:`meshes_folder`)."""
+    if isinstance(name, str) and name.startswith(GENERATED_PREFIX):
+        seed = name[len(GENERATED_PREFIX):]
+        if not seed.isdigit():
+            raise ParameterError(f"a generated scene is named {GENERATED_PREFIX}<seed> with a seed of digits, got {name!r}")
+        scene = generate(int(seed))
+    elif not isinstance(name, str) or name not in _SCENES:
+        raise ParameterError(f"unknown scene {name!r}; built-in scenes: {names()}, or {GENERATED_PREFIX}<seed>")
+    else:
+        scene = _SCENES[name]()
     assert scene.camera is not None
     if width is not None or height is not None:
         scene = scene.with_camera(
@@ -319,3 +339,264 @@ def sponza(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_radiu
     camera = Camera(eye=(-10.0, 2.5, 0.5), target=(4.0, 4.0, 0.0), fov_y=60.0, width=width, height=height)
     light = SphereLight(center=(0.0, 7.0, 0.0), radius=light_radius, intensity=150.0)
     return Scene([hall], light, camera, name="sponza")
+
+
+def inverted_box(center: tuple[float, float, float], extents: tuple[float, float, float], *, name: str = "room", object_id: int = 0) -> Mesh:
+    """A closed box whose faces point inwards: walls, floor and ceiling seen from inside."""
+    walls = box(center, extents, name=name, object_id=object_id)
+    return Mesh(walls.vertices, np.asarray(walls.faces)[:, ::-1], albedo=0.7, object_id=object_id, name=name, transform=walls.transform)
+
+
+# --- The seeded scene generator (issue 28) ----------------------------------
+
+#: ``get`` builds ``generate(seed)`` for the name ``"generated:<seed>"``.
+GENERATED_PREFIX = "generated:"
+
+#: The mesh files the generator draws from, relative to :func:`meshes_folder`:
+#: every single-object mesh of ``../shared/meshes`` (not the Cornell box or
+#: Sponza, which are rooms) and its whole ``corpus/``: closed, open (the
+#: bunny, two scans, an aeroplane with cut-out windows), non-manifold (the
+#: small bunny), 12 to 70k triangles.
+GENERATOR_MESHES = (
+    "cube.obj",
+    "spot.obj",
+    "teapot-mcguire-closed.obj",
+    "bun_zipper.ply",
+    "bun_zipper_res4.ply",
+    "corpus/boot.obj",
+    "corpus/cat-low-resolution.obj",
+    "corpus/cow-low-resolution.obj",
+    "corpus/demosthenes-low-res.obj",
+    "corpus/fish_low_resolution.obj",
+    "corpus/koala_low_resolution.obj",
+    "corpus/mushroom.obj",
+    "corpus/penguin.obj",
+    "corpus/plane_holes.obj",
+    "corpus/torus.obj",
+)
+
+
+def meshes_folder() -> Path | None:
+    """The shared meshes: ``$PENUMBRA_MESHES`` when set, else the
+    ``../shared/meshes`` beside the repository this package was loaded from;
+    None when that folder does not exist."""
+    env = os.environ.get("PENUMBRA_MESHES")
+    folder = Path(env) if env else Path(__file__).resolve().parents[2].parent / "shared" / "meshes"
+    return folder if folder.is_dir() else None
+
+
+@functools.lru_cache(maxsize=32)
+def _unit_mesh(path: str) -> tuple[np.ndarray, np.ndarray]:
+    """A mesh file's vertices centred on their bounding box and scaled to a
+    largest extent of 1, and its faces (read once per process)."""
+    loaded = load_mesh(path)
+    vertices = (np.asarray(loaded.vertices, dtype=np.float64) - loaded.bounds.mean(axis=0)) / float(np.max(loaded.extents))
+    return vertices, np.asarray(loaded.faces)
+
+
+@dataclass(frozen=True)
+class GeneratedSpec:
+    """What :func:`generate` drew for a seed; lengths in units of the main
+    mesh's size (the largest extent of its bounding box), before ``scale``."""
+
+    seed: int
+    mesh: str
+    #: Rotated about every axis (else about the vertical only).
+    tumbled: bool
+    #: Height of the mesh's lowest point above the floor (0: resting).
+    lift: float
+    light_radius: float
+    #: Degrees above the horizon of the light's centre seen from the mesh's centre.
+    elevation: float
+    #: Distance from the mesh's centre to the light's centre.
+    light_distance: float
+    #: Half the floor's width over the light's height above the floor.
+    floor_over_light_height: float
+    #: A second mesh between the light and the first (their shadows overlap), or None.
+    second_mesh: str | None
+    room: bool
+    #: Every length times this in the scene (10^-1 to 10^1.3).
+    scale: float
+
+    def describe(self) -> str:
+        name = self.mesh.rsplit("/", 1)[-1].rsplit(".", 1)[0]
+        parts = [name, f"r={self.light_radius:.2f}", f"elev={self.elevation:.0f}", f"floor={self.floor_over_light_height:.1f}h"]
+        if self.lift > 0:
+            parts.append(f"lift={self.lift:.2f}")
+        if self.tumbled:
+            parts.append("tumbled")
+        if self.second_mesh:
+            parts.append("+" + self.second_mesh.rsplit("/", 1)[-1].rsplit(".", 1)[0])
+        if self.room:
+            parts.append("room")
+        return " ".join(parts)
+
+
+def _draw(seed: int) -> GeneratedSpec:
+    """The generator's choices for ``seed`` (numpy's PCG64, so the same on
+    every machine)."""
+    rng = np.random.default_rng([28, seed])
+    mesh = str(rng.choice(GENERATOR_MESHES))
+    tumbled = bool(rng.random() < 0.4)
+    lift = 0.0 if rng.random() < 0.6 else float(rng.uniform(0.1, 1.0))
+    light_radius = float(10 ** rng.uniform(-1.0, 0.0))
+    elevation = float(rng.uniform(20.0, 90.0))
+    light_distance = light_radius + float(rng.uniform(1.2, 3.5))
+    floor = float(10 ** rng.uniform(0.0, math.log10(8.0)))
+    second = str(rng.choice(GENERATOR_MESHES)) if rng.random() < 0.3 else None
+    room = bool(rng.random() < 0.15)
+    scale = float(10 ** rng.uniform(-1.0, 1.3))
+    return GeneratedSpec(seed, mesh, tumbled, lift, light_radius, elevation, light_distance, floor, second, room, scale)
+
+
+def _rotation(rng: np.random.Generator, tumbled: bool) -> np.ndarray:
+    if tumbled:
+        return trimesh.transformations.random_rotation_matrix(rand=rng.random(3))[:3, :3]
+    return trimesh.transformations.rotation_matrix(float(rng.uniform(0, 2 * math.pi)), [0, 1, 0])[:3, :3]
+
+
+def _placed(path: Path, rotation: np.ndarray, size: float) -> np.ndarray:
+    """The mesh's vertices rotated, then scaled to a largest extent of
+    ``size``, centred on their bounding box."""
+    vertices, _ = _unit_mesh(str(path))
+    v = vertices @ rotation.T
+    v = v - (v.min(axis=0) + v.max(axis=0)) / 2
+    return v * (size / float(np.max(v.max(axis=0) - v.min(axis=0))))
+
+
+def _shadow_points(points: np.ndarray, light: np.ndarray, reach: float) -> np.ndarray:
+    """``points`` projected from ``light`` onto the floor y = 0, each at most
+    ``reach`` from the light's foot (points at or above the light go there)."""
+    foot = np.array([light[0], 0.0, light[2]])
+    out = []
+    for p in points:
+        drop = light[1] - p[1]
+        # Below the light: the ray from the light through p meets y = 0 at
+        # light + (p - light) * light_y / drop (drop > 0, so no division by zero).
+        q = light + (p - light) * (light[1] / drop) if drop > 1e-9 else foot + np.array([p[0] - light[0], 0.0, p[2] - light[2]]) * 1e9
+        d = q - foot
+        length = float(np.linalg.norm(d))
+        out.append(foot + d * (reach / length) if length > reach else q)
+    return np.array(out)
+
+
+def generate(seed: int, *, width: int = 256, height: int | None = None, folder: str | os.PathLike[str] | None = None) -> Scene:
+    """A scene drawn from ``seed``: a mesh of :data:`GENERATOR_MESHES` (from
+    ``folder``, default :func:`meshes_folder`) turned about the vertical or
+    tumbled, resting on or floating over a closed floor slab, under a sphere
+    light of radius 0.1-1 of the mesh's size at 20-90 degrees of elevation;
+    the floor's half width 1-8 times the light's height (at least what holds
+    the shadow); sometimes a second mesh between the light and the first, so
+    that their shadows overlap; sometimes a room (an inverted box) around
+    everything, the camera inside; the whole scene at a scale of 0.1-20 and
+    moved off the origin. The camera frames the mesh and the near part of its
+    shadow. The same seed gives the same scene everywhere; ``describe`` of
+    :func:`generated_spec` says what was drawn, and the scene's name is
+    ``"generated:<seed> <description>"``."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ParameterError(f"seed must be a non-negative integer, got {seed!r}")
+    root = Path(folder) if folder is not None else meshes_folder()
+    if root is None or not root.is_dir():
+        raise ParameterError("generated scenes need the shared meshes: set PENUMBRA_MESHES or pass folder= (../shared/meshes beside the repository was not found)")
+    spec = _draw(int(seed))
+    rng = np.random.default_rng([28, int(seed), 1])
+    height = width if height is None else height
+
+    # The main mesh, its lowest point `lift` above the floor, centred over the origin.
+    vertices = _placed(root / spec.mesh, _rotation(rng, spec.tumbled), 1.0)
+    vertices[:, 1] += -vertices[:, 1].min() + max(spec.lift, 1e-3)
+    centre = (vertices.min(axis=0) + vertices.max(axis=0)) / 2
+    bound = float(np.linalg.norm(vertices - centre, axis=1).max())
+
+    # The light: at `elevation` seen from the mesh's centre; its sphere clear
+    # of the mesh's bounding sphere (light_distance >= radius + 1.2 > radius +
+    # bound, since bound <= sqrt(3)/2) and of the floor.
+    azimuth = float(rng.uniform(0, 2 * math.pi))
+    e = math.radians(spec.elevation)
+    direction = np.array([math.cos(e) * math.cos(azimuth), math.sin(e), math.cos(e) * math.sin(azimuth)])
+    meshes_data = [(spec.mesh, vertices, 1)]
+    distance = spec.light_distance
+    second = None
+    if spec.second_mesh is not None:
+        size2 = float(rng.uniform(0.35, 0.7))
+        v2 = _placed(root / spec.second_mesh, _rotation(rng, True), size2)
+        bound2 = float(np.linalg.norm(v2, axis=1).max())
+        # Between the two: clear of the first mesh's and the light's spheres.
+        low, high_gap = bound + bound2 + 0.05, spec.light_radius + bound2 + 0.05
+        distance = max(distance, low + high_gap + 0.2)
+        at = centre + direction * float(rng.uniform(low, distance - high_gap))
+        at[1] = max(at[1], bound2 + 0.02)  # above the floor
+        second = (spec.second_mesh, v2 + at, 2)
+    light = centre + direction * distance
+    light[1] = max(light[1], spec.light_radius + 0.1)
+    if second is not None:
+        meshes_data.append(second)
+
+    # The floor: wide enough for the shadow (to 6 units from the light's
+    # foot) and `floor_over_light_height` times the light's height.
+    everything = np.concatenate([v for _, v, _ in meshes_data])
+    shadow = _shadow_points(everything[:: max(1, len(everything) // 2000)], light, 6.0)
+    extent = np.concatenate([everything, shadow, light[None, :]])
+    half = max(float(np.abs(extent[:, [0, 2]]).max()) * 1.1, spec.floor_over_light_height * float(light[1]))
+
+    framed = np.concatenate([everything, _shadow_points(everything[:: max(1, len(everything) // 500)], light, 3.0)])
+    target = (framed.min(axis=0) + framed.max(axis=0)) / 2
+    radius = float(np.linalg.norm(framed - target, axis=1).max())
+    if spec.room:
+        lo = np.minimum(extent.min(axis=0), light - spec.light_radius) - float(rng.uniform(0.3, 1.5))
+        hi = np.maximum(everything.max(axis=0), light + spec.light_radius) + float(rng.uniform(0.3, 1.5))
+        lo[1] = 0.0
+        lo[[0, 2]] = np.maximum(lo[[0, 2]], -half)
+        hi[[0, 2]] = np.minimum(hi[[0, 2]], half)
+        room_centre, room_size = (lo + hi) / 2, hi - lo
+        # The camera inside, near a top corner on the side away from the light.
+        corner = np.where(light > room_centre, lo, hi)
+        eye = corner + (room_centre - corner) * 0.12
+        eye[1] = lo[1] + room_size[1] * 0.75
+        fov = 75.0
+    else:
+        fov = 45.0
+        view = float(rng.uniform(25.0, 70.0))
+        for turn in range(8):  # a view whose eye is clear of the light and the meshes
+            psi = azimuth + math.pi + float(rng.uniform(-1.2, 1.2)) + turn * math.pi / 4
+            eye = target + radius / math.sin(math.radians(fov / 2)) * 1.05 * np.array(
+                [math.cos(math.radians(view)) * math.cos(psi), math.sin(math.radians(view)), math.cos(math.radians(view)) * math.sin(psi)]
+            )
+            if np.linalg.norm(eye - light) > spec.light_radius * 1.5 + 0.1:
+                break
+
+    # The whole scene moved off the origin and scaled.
+    offset = np.array([float(rng.uniform(-3, 3)), 0.0, float(rng.uniform(-3, 3))])
+    s = spec.scale
+
+    def world(p: np.ndarray) -> np.ndarray:
+        return (p + offset) * s
+
+    meshes: list[Mesh] = []
+    if spec.room:
+        meshes.append(inverted_box(tuple(world(room_centre)), tuple(room_size * s), name="room", object_id=0))
+    else:
+        floor = ground_slab(half_size=half, thickness=0.1)
+        meshes.append(Mesh(world(np.asarray(floor.vertices)), floor.faces, albedo=0.8, object_id=0, name="ground"))
+    for path, v, object_id in meshes_data:
+        _, faces = _unit_mesh(str(root / path))
+        meshes.append(Mesh(world(v), faces, albedo=0.7, object_id=object_id, name=path.rsplit("/", 1)[-1]))
+    # About 0.5 radiance on the floor under the light: albedo 0.8 / pi times
+    # the irradiance pi * intensity * radius^2 / height^2.
+    intensity = 0.625 * (float(light[1]) / spec.light_radius) ** 2
+    camera = Camera(eye=tuple(world(eye)), target=tuple(world(target)), fov_y=fov, width=width, height=height)
+    return Scene(meshes, SphereLight(tuple(world(light)), spec.light_radius * s, intensity=intensity), camera, name=f"{GENERATED_PREFIX}{seed} {spec.describe()}")
+
+
+def generated_spec(seed: int) -> GeneratedSpec:
+    """What :func:`generate` draws for ``seed``, without building the scene."""
+    return _draw(int(seed))
+
+
+def generated_suite(count: int, *, first: int = 0, width: int = 96, folder: str | os.PathLike[str] | None = None) -> dict[str, Scene]:
+    """``count`` generated scenes, seeds ``first`` to ``first + count - 1``, by name."""
+    out = {}
+    for seed in range(first, first + count):
+        scene = generate(seed, width=width, folder=folder)
+        out[scene.name] = scene
+    return out
