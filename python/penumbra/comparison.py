@@ -41,6 +41,7 @@ __all__ = [
     "timed_render",
     "timing_renderer",
     "DEFAULT_SIZE",
+    "RECOMMENDED",
     "DEFAULT_SPP",
     "DEFAULT_REPEATS",
     "DEFAULT_BUDGET_S",
@@ -79,6 +80,13 @@ class Timing:
         """Which clock, and how the figure was taken."""
         passes = {"cpu_clock": "CPU clocks", "gpu_timestamps": "GPU timestamps"}.get(self.pass_clock, self.pass_clock)
         return f"wall clock of the render call, median of {len(self.timed_ms)} after a warm-up render; passes by {passes}"
+
+
+#: Settings the docs recommend over a method's defaults, by method: one place
+#: for the tests, the benchmarks and the README (docs/real_meshes.md measures them).
+RECOMMENDED: dict[str, dict[str, Any]] = {
+    "pvmf": {"kernel": "disk", "n_blur": 0, "offsets": "radius", "umbra": "skip", "s_e": 0.02},
+}
 
 
 def timing_renderer() -> Renderer:

@@ -125,6 +125,9 @@ def _metrics(radiance: np.ndarray | None, visibility: np.ndarray, object_id: np.
         "visibility_flip": flip(visibility, gv),
         "penumbra_pixels": float(region.sum()),
     }
+    stray, out_of = stray_pixels(visibility, gv, None if object_id is None else object_id >= 0)
+    # Over the pixels fully lit or in umbra; none (an all-penumbra image) counts as no stray pixel.
+    out["stray_fraction"] = stray / out_of if out_of else 0.0
     if radiance is not None and "radiance" in gt:
         gr = gt["radiance"]
         _same_shape(radiance, gr, "radiance")
@@ -139,7 +142,7 @@ def _metrics(radiance: np.ndarray | None, visibility: np.ndarray, object_id: np.
 # Metrics whose seed-to-seed value is divided by sqrt(2) to give one ground
 # truth's noise (independent noise adds in quadrature).
 _QUADRATURE = {"visibility_rmse", "visibility_rmse_penumbra", "radiance_rmse_rel", "radiance_mae_rel"}
-_COUNTS = {"penumbra_pixels", "silhouette_pixels_excluded"}
+_COUNTS = {"penumbra_pixels", "silhouette_pixels_excluded", "stray_fraction"}
 
 
 def compare_images(
@@ -153,6 +156,8 @@ def compare_images(
 
     - ``visibility_rmse`` over all pixels, ``visibility_rmse_penumbra`` over the
       penumbra region, ``visibility_max_error``, ``visibility_flip`` (mean LDR FLIP);
+    - ``stray_fraction``: :func:`stray_pixels` over the pixels it counts
+      (on geometry when ``object_id`` is given);
     - ``radiance_rmse_rel`` and ``radiance_mae_rel``, relative to :func:`lit_mean`,
       over pixels off geometric silhouettes (``object_id`` gives them);
     - ``noise_<metric>`` for each, when ``gt.second`` exists: the same metric

@@ -1,0 +1,194 @@
+"""The generated real-mesh suite (issue 28): `penumbra.scenes.generate`
+scenes from the shared meshes and their corpus, every soft method against
+Mitsuba ground truth on each.
+
+Each method's penumbra visibility RMSE and stray pixels are held to what was
+measured on the suite (`python3 -m penumbra bench --config
+benchmarks/generated.toml` prints the same table, with times), and the
+targets of issue 28 that are not met yet are strict xfails: they start
+failing, and so say so, the day a method meets them. When a bound fails the
+method, truth and difference images of the method's worst scenes are left
+under test-artifacts/generated/.
+
+Skipped without the shared meshes or Mitsuba. The truth (256 samples per
+pixel, 96x96) is cached like `penumbra compare`'s: about 60 s to render on 2
+cores the first time."""
+
+from __future__ import annotations
+
+import json
+import statistics
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra import metrics, scenes
+from penumbra.comparison import RECOMMENDED
+from test_real_meshes import leave_images
+
+FOLDER = scenes.meshes_folder()
+pytestmark = pytest.mark.skipif(FOLDER is None, reason="the shared meshes (../shared/meshes or $PENUMBRA_MESHES) are absent")
+ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts" / "generated"
+
+SEEDS = range(40)
+SIZE = 96
+SPP = 256
+SLOW_SEEDS = range(40, 100)
+SLOW_SIZE = 160
+# (name, method, parameters) of every setting the suite measures.
+SETTINGS: list[tuple[str, str, dict[str, Any]]] = [
+    ("hard", "hard", {}),
+    ("pcss", "pcss", {}),
+    ("backprojection", "backprojection", {}),
+    ("pvm", "pvm", {}),
+    ("pvmf", "pvmf", {}),
+    ("pvmf recommended", "pvmf", RECOMMENDED["pvmf"]),
+    ("wedges", "wedges", {}),
+]
+
+
+def measure(seeds: range, size: int) -> dict[str, dict[int, dict[str, float]]]:
+    """setting -> seed -> {rmse, stray, of the scene at `size`}; the images
+    of every render kept in `IMAGES` for the failure reports."""
+    pm = pytest.importorskip("penumbra.mitsuba")
+    pytest.importorskip("mitsuba")
+    renderer = penumbra.Renderer()
+    out: dict[str, dict[int, dict[str, float]]] = {name: {} for name, _, _ in SETTINGS}
+    for seed in seeds:
+        scene = scenes.generate(seed, width=size, folder=FOLDER)
+        gt = pm.ground_truth(scene, spp=SPP, kinds=["visibility"])
+        for name, method, params in SETTINGS:
+            result = renderer.render(scene, method, outputs=["visibility", "object_id"], **params)
+            m = metrics.compare_images(result.visibility, gt, object_id=result.object_id)
+            out[name][seed] = {"rmse": m["visibility_rmse_penumbra"], "stray": m["stray_fraction"], "penumbra_pixels": m["penumbra_pixels"]}
+            IMAGES[(name, seed, size)] = (result.visibility, gt.visibility)
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    (ARTIFACTS / f"table_{size}.json").write_text(json.dumps(out, indent=1))
+    return out
+
+
+IMAGES: dict[tuple[str, int, int], tuple[np.ndarray, np.ndarray]] = {}
+
+
+@pytest.fixture(scope="module")
+def table() -> dict[str, dict[int, dict[str, float]]]:
+    return measure(SEEDS, SIZE)
+
+
+def fail_with_images(what: str, name: str, seeds: list[int], size: int = SIZE) -> None:
+    folders = [leave_images(f"{name}-seed{seed}-{size}", *IMAGES[(name, seed, size)], ARTIFACTS) for seed in seeds if (name, seed, size) in IMAGES]
+    pytest.fail(f"{what}; method, truth and difference images in {[str(f) for f in folders]}")
+
+
+def test_the_generator_is_deterministic_and_draws_every_kind_of_scene() -> None:
+    a, b = scenes.generate(7, width=16, folder=FOLDER), scenes.generate(7, width=16, folder=FOLDER)
+    assert a.name == b.name
+    for ma, mb in zip(a.meshes, b.meshes):
+        np.testing.assert_array_equal(np.asarray(ma.vertices), np.asarray(mb.vertices))
+    specs = [scenes.generated_spec(s) for s in SEEDS]
+    assert len({s.mesh for s in specs}) >= 12, "most meshes of the pool drawn"
+    assert sum(s.room for s in specs) >= 3 and sum(s.second_mesh is not None for s in specs) >= 6
+    assert sum(s.tumbled for s in specs) >= 8 and sum(s.lift > 0 for s in specs) >= 8
+    assert min(s.elevation for s in specs) < 30 and max(s.elevation for s in specs) > 80
+    assert min(s.light_radius for s in specs) < 0.15 and max(s.light_radius for s in specs) > 0.8
+    assert sum(s.floor_over_light_height > 4 for s in specs) >= 6
+    assert min(s.scale for s in specs) < 0.2 and max(s.scale for s in specs) > 10
+
+
+def test_the_generator_refuses_what_it_cannot_build(tmp_path: Path) -> None:
+    with pytest.raises(penumbra.ParameterError, match="non-negative integer"):
+        scenes.generate(-1, folder=FOLDER)
+    with pytest.raises(penumbra.ParameterError, match="seed of digits"):
+        scenes.get("generated:seven")
+    with pytest.raises(penumbra.MeshError, match="cannot read"):
+        scenes.generate(0, folder=tmp_path)
+
+
+def test_every_generated_scene_shows_a_penumbra(table: dict[str, dict[int, dict[str, float]]]) -> None:
+    # At least 1% of the image in penumbra: an RMSE over fewer pixels says little.
+    few = {seed: row["penumbra_pixels"] for seed, row in table["hard"].items() if row["penumbra_pixels"] < 0.01 * SIZE * SIZE}
+    assert not few, f"scenes with almost no penumbra in view: {few}"
+
+
+def summary(rows: dict[int, dict[str, float]], hard: dict[int, dict[str, float]]) -> dict[str, float]:
+    rmse = [r["rmse"] for r in rows.values()]
+    over_hard = [rows[s]["rmse"] / hard[s]["rmse"] for s in rows]
+    stray = [r["stray"] for r in rows.values()]
+    return {
+        "median": statistics.median(rmse), "worst": max(rmse),
+        "worst_over_hard": max(over_hard), "median_stray": statistics.median(stray), "worst_stray": max(stray),
+    }
+
+
+# What each setting measured on seeds 0-39 at 96x96 (the table this test
+# writes to test-artifacts/generated/table_96.json). The renders and the
+# cached truth are deterministic; the slack (5% + 0.003 in RMSE, 0.2% of
+# pixels in stray) leaves room for a truth rendered on another CPU.
+MEASURED: dict[str, dict[str, float]] = {
+    "hard": {"median": 0.291, "worst": 0.366, "median_stray": 0.0002, "worst_stray": 0.0023},
+    "pcss": {"median": 0.112, "worst": 0.364, "median_stray": 0.0005, "worst_stray": 0.0575},
+    "backprojection": {"median": 0.048, "worst": 0.157, "median_stray": 0.0004, "worst_stray": 0.0113},
+    "pvm": {"median": 0.134, "worst": 0.189, "median_stray": 0.0014, "worst_stray": 0.0145},
+    "pvmf": {"median": 0.159, "worst": 0.287, "median_stray": 0.0044, "worst_stray": 0.058},
+    "pvmf recommended": {"median": 0.073, "worst": 0.268, "median_stray": 0.0004, "worst_stray": 0.0575},
+    "wedges": {"median": 0.26, "worst": 0.642, "median_stray": 0.0019, "worst_stray": 0.4263},
+}
+
+
+@pytest.mark.parametrize("name", [n for n, _, _ in SETTINGS])
+def test_each_method_holds_its_measured_accuracy_over_the_suite(name: str, table: dict[str, dict[int, dict[str, float]]]) -> None:
+    got = summary(table[name], table["hard"])
+    if name not in MEASURED:
+        pytest.skip(f"not measured yet: {got}")
+    want = MEASURED[name]
+    failed = {}
+    for key in ("median", "worst"):
+        if got[key] > want[key] * 1.05 + 0.003:
+            failed[key] = (round(got[key], 4), want[key])
+    for key in ("median_stray", "worst_stray"):
+        if got[key] > want[key] + 0.002:
+            failed[key] = (round(got[key], 4), want[key])
+    if failed:
+        worst = sorted(table[name], key=lambda s: -table[name][s]["rmse"])[:3]
+        fail_with_images(f"{name}: {failed} (measured, bound)", name, worst)
+
+
+def within_half_of_hard(table: dict[str, dict[int, dict[str, float]]], name: str) -> list[int]:
+    """The seeds on which `name` misses issue 28's bar: a penumbra RMSE above
+    0.5x hard's, or more than 0.5% stray pixels."""
+    return [s for s, row in table[name].items() if row["rmse"] > 0.5 * table["hard"][s]["rmse"] or row["stray"] > 0.005]
+
+
+# Issue 28's targets. Missed today (the counts of scenes missed, seeds 0-39):
+# wedges 38, pvm 14, pvmf 27; wedges' median 0.26 and pvm's 0.134 against
+# pcss's 0.112. Strict: each starts failing when the method meets it.
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="issue 28: not met yet")) for n in ("wedges", "pvm", "pvmf")])
+def test_issue_28_every_scene_within_half_of_hard_and_few_stray_pixels(name: str, table: dict[str, dict[int, dict[str, float]]]) -> None:
+    missed = within_half_of_hard(table, name)
+    if missed:
+        fail_with_images(f"{name} misses 0.5x hard's penumbra RMSE or 0.5% stray pixels on {len(missed)} scenes: seeds {missed}", name, missed[:3])
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="issue 28: not met yet")) for n in ("wedges", "pvm")] + ["pvmf recommended"])
+def test_issue_28_median_at_most_pcss(name: str, table: dict[str, dict[int, dict[str, float]]]) -> None:
+    median = statistics.median(r["rmse"] for r in table[name].values())
+    pcss = statistics.median(r["rmse"] for r in table["pcss"].values())
+    assert median <= pcss, f"{name}'s median penumbra RMSE {median:.4f} above pcss's {pcss:.4f}"
+
+
+@pytest.mark.slow
+def test_the_slow_suite_at_160_pixels() -> None:
+    """60 more scenes at 160x160: every setting's median and worst printed
+    and written to test-artifacts/generated/table_160.json, held to the
+    faithful bars of the default suite's medians (with the same slack)."""
+    table = measure(SLOW_SEEDS, SLOW_SIZE)
+    failed = {}
+    for name, _, _ in SETTINGS:
+        got = summary(table[name], table["hard"])
+        print(name, {k: round(v, 4) for k, v in got.items()})
+        if got["median"] > MEASURED[name]["median"] * 1.25 + 0.01:
+            failed[name] = (round(got["median"], 4), MEASURED[name]["median"])
+    assert not failed, f"medians on the slow suite well above the default suite's: {failed}"
