@@ -3,7 +3,9 @@ the quick run end to end (the CI run of the benchmark)."""
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import io
 import math
 from pathlib import Path
 
@@ -46,12 +48,18 @@ def test_grids_expand_to_their_product_without_repeats() -> None:
 
 
 def test_the_repository_config_loads_full_and_quick() -> None:
+    import penumbra
+
+    if penumbra.scenes.meshes_folder() is None:
+        pytest.skip("the config's real scenes need the shared meshes")
     full = bench.load_config(CONFIG)
     quick = bench.load_config(CONFIG, quick=True)
     assert full.name == "bench" and quick.name == "bench_quick"
-    assert len(full.scenes) == 4 and quick.scenes == ["sphere_on_plane"]
+    real = [s for s in full.scenes if s not in penumbra.scenes.names()]
+    assert len([s for s in real if s.startswith("generated:")]) >= 20 and len(real) >= 25, "the full run is on real scenes"
+    assert full.large["width"] == 1920 and full.large["height"] == 1080 and full.large["scenes"]
+    assert quick.scenes == ["sphere_on_plane", "generated:6"]
     assert quick.size < full.size and quick.peers["mitsuba_spp"] and quick.peers["reference_samples"]
-    import penumbra
 
     assert set(full.methods) == set(penumbra.methods()) - {"reference"}, "every method but the peer is benchmarked"
 
@@ -63,6 +71,9 @@ def test_the_repository_config_loads_full_and_quick() -> None:
         ("scenes = ['sphere_on_plane']\nsizes = 3\n", "unknown key 'sizes'"),
         ("scenes = 'sphere_on_plane'\n", "'scenes' must be a list"),
         ("scenes = ['no_such_scene']\n", "unknown scenes ['no_such_scene']"),
+        ("scenes = ['generated:5..2']\n", "unknown scenes ['generated:5..2']"),
+        ("scenes = ['sphere_on_plane']\n[large]\nscenes = ['sphere_on_plane']\nwidth = 64\n", "[large] needs 'height'"),
+        ("scenes = ['sphere_on_plane']\n[large]\nscenes = ['sphere_on_plane']\nwidth = 64\nheight = 0\n", "'height' must be an integer of at least 1"),
         ("scenes = ['sphere_on_plane']\n[methods]\nhard = 3\n", "methods.hard must be a table"),
         ("scenes = [\n", "not valid TOML"),
         ("scenes = ['sphere_on_plane']\n[quick]\nrepeats = 'two'\n", "[quick]: 'repeats' must be an integer"),
@@ -84,18 +95,27 @@ def test_a_missing_config_is_a_clear_cli_error(tmp_path: Path, capsys: pytest.Ca
 def test_quick_run_writes_every_output_and_its_numbers_hold(renderer: object, tmp_path: Path) -> None:
     if not pm.variant().startswith("llvm"):
         pytest.skip("visibility ground truth needs Mitsuba's llvm variant")
+    import penumbra
+
+    if penumbra.scenes.meshes_folder() is None:
+        pytest.skip("the quick run's generated scene needs the shared meshes")
     assert cli.main(["bench", "--quick", "--config", str(CONFIG), "--out", str(tmp_path)]) == 0
-    for name in ("results.csv", "pareto.png", "pareto.md", "ratios.md", "scaling.csv", "scaling.png", "machine.md"):
+    for name in ("results.csv", "pareto.png", "pareto.md", "ratios.md", "suite.md", "rows.jsonl", "scaling.csv", "scaling.png", "machine.md"):
         assert (tmp_path / name).stat().st_size > 0, name
     with open(tmp_path / "results.csv") as f:
         rows = list(csv.DictReader(f))
     cfg = bench.load_config(CONFIG, quick=True)
     assert {r["method"] for r in rows} == set(cfg.methods) | {"reference", "mitsuba"}
-    hard = [r for r in rows if r["method"] == "hard" and r["label"] == "default"]
+    assert {r["size"] for r in rows} == {"48x48", "64x36"}, "the main part and the [large] one"
+    hard = [r for r in rows if r["method"] == "hard" and r["label"] == "default" and r["scene"] == "sphere_on_plane"]
     assert len(hard) == 1 and float(hard[0]["time_over_hard"]) == 1.0
     # The row schema sweeps share (penumbra.grid.result_columns): ms_<pass>, stat_<name>, reused.
     assert float(hard[0]["ms_gbuffer"]) > 0 and float(hard[0]["stat_map_size"]) > 0 and hard[0]["reused"] == ""
-    assert not any(k.startswith("time_") and k != "time_over_hard" for k in rows[0])
+    assert not any(k.startswith("time_") and k not in ("time_over_hard", "time_over_mitsuba") for k in rows[0])
+    # Every method row is set against the scene's Mitsuba curve at its own error.
+    for r in rows:
+        if r["method"] != "mitsuba":
+            assert r["mitsuba_bound"] in ("=", "<=", ">=") and float(r["time_over_mitsuba"]) > 0, r
     for r in rows:
         assert float(r["total_ms"]) > 0 and 0 <= float(r[bench.ERROR]) < 1, r
         assert float(r["noise_visibility_rmse_penumbra"]) >= 0
@@ -108,9 +128,14 @@ def test_quick_run_writes_every_output_and_its_numbers_hold(renderer: object, tm
     for method in cfg.methods:
         assert f"| {method} |" in ratios
     assert "time / Mitsuba at equal error" in ratios
+    suite = (tmp_path / "suite.md").read_text()
+    assert "### 48x48, 2 scenes" in suite and "### 64x36, 1 scenes" in suite and "### What to use" in suite
+    # Started again, the run reuses every finished scene.
+    capsys = io.StringIO()
+    with contextlib.redirect_stdout(capsys):
+        assert cli.main(["bench", "--quick", "--config", str(CONFIG), "--out", str(tmp_path)]) == 0
+    assert capsys.getvalue().count(": cached") == 3
     machine = (tmp_path / "machine.md").read_text()
     assert "commit:" in machine and "adapter:" in machine
-    import penumbra
-
     if penumbra.adapter_info()["is_software"]:
         assert "timing: cpu_clock" in machine and {r["timing_source"] for r in rows} == {"cpu_clock"}

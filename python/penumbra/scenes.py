@@ -19,7 +19,7 @@ import functools
 import math
 import os
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -54,6 +54,9 @@ __all__ = [
     "generated_spec",
     "generated_suite",
     "GENERATED_PREFIX",
+    "REAL_FORMS",
+    "real_names",
+    "expand_names",
 ]
 
 DEFAULT = "sphere_on_plane"
@@ -156,18 +159,18 @@ def names() -> list[str]:
 
 
 def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = None, light_radius: float | None = None) -> Scene:
-    """Builds the built-in scene ``name``, optionally at another image size or
-    light radius. ``"generated:<seed>"`` is :func:`generate` ``(seed)`` (it
-    needs the shared meshes: :func:`meshes_folder`)."""
-    if isinstance(name, str) and name.startswith(GENERATED_PREFIX):
-        seed = name[len(GENERATED_PREFIX):]
-        if not seed.isdigit():
-            raise ParameterError(f"a generated scene is named {GENERATED_PREFIX}<seed> with a seed of digits, got {name!r}")
-        scene = generate(int(seed))
-    elif not isinstance(name, str) or name not in _SCENES:
-        raise ParameterError(f"unknown scene {name!r}; built-in scenes: {names()}, or {GENERATED_PREFIX}<seed>")
-    else:
+    """Builds the scene ``name``, optionally at another image size or light
+    radius: a built-in scene (:func:`names`), or one from the shared meshes
+    (:func:`meshes_folder`; :func:`real_names` lists the forms):
+    ``"generated:<seed>"`` (:func:`generate`), ``"mesh:<file>"``
+    (:func:`from_mesh`, ``setup="close"``), ``"wide_floor:<file>"``
+    (:func:`wide_floor`), ``"cornell_box"`` and ``"sponza"``."""
+    if not isinstance(name, str):
+        raise ParameterError(f"a scene name must be a string, got {name!r}")
+    if name in _SCENES:
         scene = _SCENES[name]()
+    else:
+        scene = _real_scene(name, _WIDTH if width is None else width, height if height is not None else (_HEIGHT if width is None else width))
     assert scene.camera is not None
     if width is not None or height is not None:
         scene = scene.with_camera(
@@ -179,6 +182,67 @@ def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = N
     if light_radius is not None:
         scene = scene.with_light(scene.light.with_radius(light_radius))
     return scene
+
+
+#: The forms of scene names that read the shared meshes (see :func:`get`).
+REAL_FORMS = ("generated:<seed>", "generated:<first>..<last>", "mesh:<file>", "wide_floor:<file>", "cornell_box", "sponza")
+
+
+def real_names() -> list[str]:
+    """The forms of :func:`get`'s names of scenes from the shared meshes."""
+    return list(REAL_FORMS)
+
+
+def _parse(name: str) -> tuple[str, str]:
+    """(kind, argument) of a scene name that is not built in; a
+    :class:`ParameterError` naming the forms for anything else."""
+    kind, _, arg = name.partition(":")
+    if name in ("cornell_box", "sponza"):
+        return name, ""
+    if kind == "generated" and arg.isdigit():
+        return kind, arg
+    if kind == "generated":
+        raise ParameterError(f"a generated scene is named {GENERATED_PREFIX}<seed> with a seed of digits, got {name!r}")
+    if kind in ("mesh", "wide_floor") and arg:
+        return kind, arg
+    raise ParameterError(f"unknown scene {name!r}; built-in scenes: {names()}; from the shared meshes: {list(REAL_FORMS)}")
+
+
+def expand_names(entries: list[str]) -> list[str]:
+    """Scene names with every ``"generated:<first>..<last>"`` range written
+    out (both ends included); each name checked (not built)."""
+    out: list[str] = []
+    for entry in entries:
+        if isinstance(entry, str) and entry.startswith(GENERATED_PREFIX) and ".." in entry:
+            first, _, last = entry[len(GENERATED_PREFIX):].partition("..")
+            if not (first.isdigit() and last.isdigit() and int(first) <= int(last)):
+                raise ParameterError(f"a range of generated scenes is {GENERATED_PREFIX}<first>..<last> with first <= last, got {entry!r}")
+            out += [f"{GENERATED_PREFIX}{k}" for k in range(int(first), int(last) + 1)]
+            continue
+        if not isinstance(entry, str):
+            raise ParameterError(f"a scene name must be a string, got {entry!r}")
+        if entry not in _SCENES:
+            _parse(entry)
+        out.append(entry)
+    return out
+
+
+def _real_scene(name: str, width: int, height: int) -> Scene:
+    kind, arg = _parse(name)
+    root = meshes_folder()
+    if root is None:
+        raise ParameterError(f"scene {name!r} needs the shared meshes: set PENUMBRA_MESHES (../shared/meshes beside the repository was not found)")
+    if kind == "generated":
+        return generate(int(arg), width=width, height=height, folder=root)
+    if kind == "cornell_box":
+        return cornell_box(str(root / "CornellBox-Original.obj"), width=width, height=height)
+    if kind == "sponza":
+        return sponza(str(root / "sponza.obj"), width=width, height=height)
+    path = root / arg
+    if not path.is_file():
+        raise ParameterError(f"scene {name!r}: no mesh file {str(path)!r}")
+    scene = from_mesh(str(path), width=width, height=height, setup="close") if kind == "mesh" else wide_floor(str(path), width=width, height=height)
+    return replace(scene, name=name)
 
 
 def _obj_with_relative_indices(path: str) -> trimesh.Trimesh | None:

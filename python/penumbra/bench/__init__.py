@@ -80,11 +80,12 @@ def build_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--config", default="benchmarks/bench.toml", help="the benchmark config (default benchmarks/bench.toml)")
     parser.add_argument("--quick", action="store_true", help="apply the config's [quick] table (the CI run: a few minutes)")
     parser.add_argument("--out", help="output folder (default benchmarks/results/<config name>)")
+    parser.add_argument("--fresh", action="store_true", help="ignore the rows of scenes an interrupted run finished (out/rows.jsonl)")
     return parser
 
 
 def run_from_args(args: argparse.Namespace) -> int:
     cfg = load_config(args.config, quick=args.quick)
     out = args.out or str(Path("benchmarks") / "results" / cfg.name)
-    run(cfg, out)
+    run(cfg, out, fresh=args.fresh)
     return 0

@@ -27,6 +27,7 @@ _KEYS = {
     "methods": dict,
     "peers": dict,
     "scaling": dict,
+    "large": dict,
 }
 
 
@@ -49,6 +50,9 @@ class BenchConfig:
     peers: dict[str, Any] = field(default_factory=dict)
     #: ``scene``, ``methods`` (list), ``sizes`` (list), ``radii`` (list), ``ground_truth_spp``.
     scaling: dict[str, Any] = field(default_factory=dict)
+    #: A second part at another size: ``scenes``, ``width``, ``height`` and
+    #: optionally ``ground_truth_spp``, ``methods``, ``peers`` (else the main ones).
+    large: dict[str, Any] = field(default_factory=dict)
 
 
 def _checked(values: dict[str, Any], where: str) -> dict[str, Any]:
@@ -85,17 +89,53 @@ def load_config(path: str | os.PathLike[str], quick: bool = False) -> BenchConfi
     quick_values = values.pop("quick", {})
     if quick:
         values.update(_checked(dict(quick_values), f"{path} [quick]"))
-    methods_ = values.get("methods", {})
+    values["methods"] = _grids(values.get("methods", {}), f"{path}")
+    values["scenes"] = _scene_names(values.get("scenes", []), f"{path}")
+    if values.get("large"):
+        big = dict(values["large"])
+        for key in ("scenes", "width", "height"):
+            if key not in big:
+                raise ParameterError(f"{path}: [large] needs {key!r} (scenes, width, height; optionally ground_truth_spp, methods, peers)")
+        extra = set(big) - {"scenes", "width", "height", "ground_truth_spp", "methods", "peers"}
+        if extra:
+            raise ParameterError(f"{path}: [large]: unknown keys {sorted(extra)}")
+        for key in ("width", "height", "ground_truth_spp"):
+            if key in big and (not isinstance(big[key], int) or isinstance(big[key], bool) or big[key] < 1):
+                raise ParameterError(f"{path}: [large] {key!r} must be an integer of at least 1, got {big[key]!r}")
+        big["scenes"] = _scene_names(big["scenes"], f"{path} [large]")
+        if "methods" in big:
+            big["methods"] = _grids(big["methods"], f"{path} [large]")
+        values["large"] = big
+    name = path.stem + ("_quick" if quick else "")
+    return BenchConfig(name=name, **values)
+
+
+def _grids(methods_: Any, where: str) -> dict[str, list[dict[str, Any]]]:
+    if not isinstance(methods_, dict):
+        raise ParameterError(f"{where}: methods must be a table")
+    out = {}
     for method, grids in methods_.items():
         grids = [grids] if isinstance(grids, dict) else grids
         if not isinstance(grids, list) or not all(isinstance(g, dict) for g in grids):
-            raise ParameterError(f"{path}: methods.{method} must be a table or a list of tables of parameters")
-        methods_[method] = grids
-    unknown = [s for s in values.get("scenes", []) if s not in scenes.names()]
+            raise ParameterError(f"{where}: methods.{method} must be a table or a list of tables of parameters")
+        out[method] = grids
+    return out
+
+
+def _scene_names(entries: Any, where: str) -> list[str]:
+    """The scene names with ``generated:<first>..<last>`` written out, each
+    one known (:func:`penumbra.scenes.get`'s names)."""
+    if not isinstance(entries, list):
+        raise ParameterError(f"{where}: 'scenes' must be a list")
+    unknown = []
+    for entry in entries:
+        try:
+            scenes.expand_names([entry])
+        except ParameterError:
+            unknown.append(entry)
     if unknown:
-        raise ParameterError(f"{path}: unknown scenes {unknown} (built-in: {scenes.names()})")
-    name = path.stem + ("_quick" if quick else "")
-    return BenchConfig(name=name, **values)
+        raise ParameterError(f"{where}: unknown scenes {unknown} (built-in: {scenes.names()}; from the shared meshes: {scenes.real_names()})")
+    return scenes.expand_names(entries)
 
 
 def expand(grids: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:

@@ -22,6 +22,9 @@ __all__ = [
     "plot_pareto",
     "plot_scaling",
     "write_csv",
+    "suite_tables",
+    "what_to_use",
+    "BUDGETS",
 ]
 
 #: The metric the Pareto plot, the tables and the ratios use.
@@ -85,14 +88,15 @@ class Point:
 
 
 def aggregate(rows: list[dict[str, Any]]) -> list[Point]:
-    """Means over the scenes of each (method, setting): time, time over
-    ``hard`` and penumbra visibility RMSE."""
+    """Medians over the scenes of each (method, setting): time, time over
+    ``hard`` and penumbra visibility RMSE (a scene where a method fails does
+    not move the median as it moves a mean)."""
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for row in rows:
         groups.setdefault((row["method"], row["label"]), []).append(row)
     return [
-        Point(method, lab, g[0]["kind"], float(np.mean([r["total_ms"] for r in g])),
-              float(np.mean([r["time_over_hard"] for r in g])), float(np.mean([r[ERROR] for r in g])))
+        Point(method, lab, g[0]["kind"], float(np.median([float(r["total_ms"]) for r in g])),
+              float(np.median([float(r["time_over_hard"]) for r in g])), float(np.median([float(r[ERROR]) for r in g])))
         for (method, lab), g in groups.items()
     ]
 
@@ -128,7 +132,7 @@ def ratio_tables(rows: list[dict[str, Any]], points: list[Point]) -> str:
     same error, over the scene means and per scene."""
     peers = {m: [(p.ms, p.error) for p in points if p.method == m] for m in ("reference", "mitsuba")}
     lines = [
-        "Means over the scenes. Best setting: the lowest penumbra visibility RMSE. The peers' times at that error are",
+        "Medians over the scenes. Best setting: the lowest penumbra visibility RMSE. The peers' times at that error are",
         "interpolated log-log along their Pareto fronts; ≥ / ≤ mark bounds where a peer's tested range does not reach it.",
         "",
         "| method | best setting | penumbra RMSE | time (ms) | time / hard | time / reference at equal error | time / Mitsuba at equal error |",
@@ -206,3 +210,74 @@ def plot_scaling(rows: list[dict[str, Any]], path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+#: The penumbra RMSE budgets of :func:`what_to_use`.
+BUDGETS = (0.02, 0.03, 0.05, 0.08, 0.12, 0.2)
+
+
+def _groups(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], list[dict[str, Any]]]:
+    groups: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault((r.get("size", ""), r["method"], r["label"]), []).append(r)
+    return groups
+
+
+def _median_ratio(group: list[dict[str, Any]]) -> str:
+    values = [float(r["time_over_mitsuba"]) for r in group if r.get("time_over_mitsuba") not in (None, "") and math.isfinite(float(r["time_over_mitsuba"]))]
+    if not values:
+        return "n/a"
+    bounded = sum(r.get("mitsuba_bound", "=") != "=" for r in group)
+    return f"{float(np.median(values)):.3g}" + (f" ({bounded} bounds)" if bounded else "")
+
+
+def suite_tables(rows: list[dict[str, Any]]) -> str:
+    """Per size, one line per method and setting: over the scenes, the median
+    and worst penumbra RMSE, stray pixels, time over ``hard`` and time over
+    Mitsuba's at equal error (rows carry ``time_over_mitsuba``)."""
+    out = []
+    by_size: dict[str, list[tuple[str, str, list[dict[str, Any]]]]] = {}
+    for (size, method, lab), group in _groups(rows).items():
+        by_size.setdefault(size, []).append((method, lab, group))
+    for size, entries in by_size.items():
+        n = len({r["scene"] for _, _, g in entries for r in g})
+        out += [f"### {size}, {n} scenes", "",
+                "| method | setting | penumbra RMSE median | worst | stray % median | worst | time / hard median | worst | time / Mitsuba at equal error, median |",
+                "|---|---|---|---|---|---|---|---|---|"]
+        for method, lab, g in entries:
+            err = [float(r[ERROR]) for r in g]
+            stray = [100 * float(r.get("stray_fraction") or 0.0) for r in g]
+            over = [float(r["time_over_hard"]) for r in g]
+            out.append(f"| {method} | {lab} | {np.median(err):.4f} | {max(err):.4f} | {np.median(stray):.2f} | {max(stray):.2f} | "
+                       f"{np.median(over):.2f} | {max(over):.2f} | {'-' if method == 'mitsuba' else _median_ratio(g)} |")
+        out.append("")
+    return "\n".join(out)
+
+
+def what_to_use(rows: list[dict[str, Any]], budgets: Sequence[float] = BUDGETS) -> str:
+    """For each size and penumbra RMSE budget: the fastest setting (least
+    median time over the scenes) whose median error meets the budget, and the
+    fastest whose worst error does, beside the median time Mitsuba's
+    visibility estimator needs for that error on the same scenes."""
+    out = ["### What to use", "",
+           "Fastest setting (least median time over the scenes) whose median penumbra RMSE meets the budget, and whose worst does; "
+           "Mitsuba: the median over the scenes of the time its visibility estimator needs for that RMSE, interpolated on each scene's curve.", ""]
+    by_size: dict[str, dict[tuple[str, str], list[dict[str, Any]]]] = {}
+    for (size, method, lab), group in _groups(rows).items():
+        by_size.setdefault(size, {})[(method, lab)] = group
+    for size, groups in by_size.items():
+        out += [f"{size}:", "", "| budget | fastest at the median | median ms | fastest in the worst case | median ms | Mitsuba median ms |", "|---|---|---|---|---|---|"]
+        scenes_ = dict.fromkeys(r["scene"] for g in groups.values() for r in g)
+        curves = {s: [(float(r["total_ms"]), float(r[ERROR])) for g in groups.values() for r in g if r["scene"] == s and r["method"] == "mitsuba"] for s in scenes_}
+        for budget in budgets:
+            cells = []
+            for use in (np.median, max):
+                fits = [(float(np.median([float(r["total_ms"]) for r in g])), m, lab) for (m, lab), g in groups.items()
+                        if m != "mitsuba" and len(g) == len(scenes_) and use([float(r[ERROR]) for r in g]) <= budget]
+                cells += [f"{min(fits)[1]} {min(fits)[2]}", f"{min(fits)[0]:.1f}"] if fits else ["none", "-"]
+            times = [time_at_error(c, budget) for c in curves.values() if c]
+            reached = [t for t, bound in times if bound != ">="]
+            mitsuba = f"{np.median([t for t, _ in times]):.1f}" + ("" if len(reached) == len(times) else f" ({len(times) - len(reached)} scenes beyond its curve)") if times else "n/a"
+            out.append(f"| {budget:g} | {cells[0]} | {cells[1]} | {cells[2]} | {cells[3]} | {mitsuba} |")
+        out.append("")
+    return "\n".join(out)

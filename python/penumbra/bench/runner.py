@@ -4,6 +4,7 @@ truth, the peers (Mitsuba's estimator, ``reference``) and the scaling runs."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -12,6 +13,7 @@ import statistics
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
@@ -20,13 +22,13 @@ import numpy as np
 from penumbra import metrics, scenes
 from penumbra import mitsuba as pm
 from penumbra.bench.config import BenchConfig, expand, label
-from penumbra.bench.report import ERROR, aggregate, pareto_table, plot_pareto, plot_scaling, ratio_tables, write_csv
+from penumbra.bench.report import ERROR, aggregate, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, what_to_use, write_csv
 from penumbra.errors import ParameterError
 from penumbra.grid import result_columns
 from penumbra.render import Renderer, RenderResult, methods
 from penumbra.scene import Scene
 
-__all__ = ["run", "run_scaling", "make_renderer", "machine_description"]
+__all__ = ["run", "run_scaling", "make_renderer", "machine_description", "parts", "Part", "with_mitsuba_ratios", "MITSUBA_RULE"]
 
 
 #: What the rows are computed from: the metrics read visibility, radiance and object ids.
@@ -68,71 +70,170 @@ def make_renderer() -> Renderer:
     return Renderer(timing, pass_cache=False)
 
 
-def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None] = print) -> list[dict[str, Any]]:
-    """Runs the benchmark and writes its outputs under ``out``; returns the rows."""
+@dataclass
+class Part:
+    """One size of the run: its scenes, image size, ground truth and grids."""
+
+    name: str
+    scenes: list[str]
+    width: int
+    height: int
+    ground_truth_spp: int
+    methods: dict[str, list[dict[str, Any]]]
+    peers: dict[str, Any]
+
+
+def parts(cfg: BenchConfig) -> list[Part]:
+    """The run's parts: the main one at ``size`` and, with a ``[large]``
+    table, its scenes at its ``width`` x ``height`` (its own ``methods``,
+    ``peers`` and ``ground_truth_spp`` where given, else the main ones)."""
+    out = [Part("main", cfg.scenes, cfg.size, cfg.size, cfg.ground_truth_spp, cfg.methods, cfg.peers)]
+    if cfg.large:
+        big = cfg.large
+        out.append(Part("large", list(big["scenes"]), int(big["width"]), int(big["height"]), int(big.get("ground_truth_spp", cfg.ground_truth_spp)),
+                        big.get("methods", cfg.methods), big.get("peers", cfg.peers)))
+    return out
+
+
+def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: str, log: Callable[[str], None]) -> list[dict[str, Any]]:
+    """Every configuration and peer of one scene of ``part``, each row with
+    its time over Mitsuba's at the same error (see :func:`with_mitsuba_ratios`)."""
+    scene = scenes.get(scene_name, width=part.width, height=part.height)
+    gt = pm.ground_truth(scene, spp=part.ground_truth_spp, noise_seed=1)
+    size = f"{part.width}x{part.height}"
+    configs: list[tuple[str, str, dict[str, Any]]] = [("method", "hard", {})]
+    for method, grids in part.methods.items():
+        configs += [("method", method, p) for p in expand(grids) if (method, p) != ("hard", {})]
+    configs += [("peer", "reference", {"n_samples": n}) for n in part.peers.get("reference_samples", [])]
+    hard_ms = math.nan
+    object_id = None
+    rows: list[dict[str, Any]] = []
+    for kind, method, params in configs:
+        result, passes, repeats = _median_render(renderer, scene, method, params, cfg)
+        total = passes.pop("total")
+        if method == "hard" and not params:
+            hard_ms = total
+        row: dict[str, Any] = {
+            "scene": scene_name, "size": size, "kind": kind, "method": method, "label": label(params),
+            "params": json.dumps(result.params, sort_keys=True), "repeats": repeats,
+            "time_over_hard": total / hard_ms,
+            # The row schema sweeps share, with the medians over the repeats.
+            **result_columns(result, timings=passes, total_ms=total),
+        }
+        row.update(metrics.compare(result, gt))
+        object_id = result.object_id
+        rows.append(row)
+        log(f"{scene_name[:30]:30s} {method:9s} {row['label']:40.40s} {row['total_ms']:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
+    spps = part.peers.get("mitsuba_spp", [])
+    if spps:
+        pm.ground_truth(scene, spp=min(spps), seed=2, kinds=["visibility", "radiance"], cache=False)  # warm-up: Dr.Jit compiles its kernels
+    for spp in spps:
+        vis_ms, images, repeats = _mitsuba_ms(scene, spp, "visibility", cfg)
+        rad_ms, rad, _ = _mitsuba_ms(scene, spp, "radiance", cfg)
+        # The same silhouette pixels left out of the radiance metrics as for the methods.
+        m = metrics.compare_images(images["visibility"], gt, radiance=rad["radiance"], object_id=object_id)
+        row = {
+            "scene": scene_name, "size": size, "kind": "peer", "method": "mitsuba", "label": f"spp={spp}",
+            "params": json.dumps({"spp": spp, "variant": pm.variant()}), "repeats": repeats,
+            "timing_source": "cpu_clock", "total_ms": vis_ms, "time_over_hard": vis_ms / hard_ms,
+            "ms_visibility": vis_ms, "ms_radiance": rad_ms, **m,
+        }
+        rows.append(row)
+        log(f"{scene_name[:30]:30s} mitsuba   {row['label']:40.40s} {vis_ms:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
+    return with_mitsuba_ratios(rows)
+
+
+#: How a row's time is set against Mitsuba's (the rule the report states).
+MITSUBA_RULE = (
+    "time over Mitsuba's at equal error: the row's time over the time Mitsuba's visibility estimator needs on the same scene "
+    "for the row's penumbra RMSE, interpolated log-log along that scene's Mitsuba curve (its Pareto front over the spp run); "
+    "where the row is more accurate than Mitsuba's most samples, Mitsuba's time is a lower bound and the ratio an upper one (<=), "
+    "where it is less accurate than Mitsuba's fewest, the ratio is a lower bound (>=)"
+)
+
+
+def with_mitsuba_ratios(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Adds ``mitsuba_ms_at_equal_error``, ``time_over_mitsuba`` and
+    ``mitsuba_bound`` (``=``, ``<=``, ``>=`` on the ratio) to every row of one
+    scene that is not Mitsuba's (:data:`MITSUBA_RULE`)."""
+    curve = [(float(r["total_ms"]), float(r[ERROR])) for r in rows if r["method"] == "mitsuba"]
+    if not curve:
+        return rows
+    for r in rows:
+        if r["method"] == "mitsuba":
+            continue
+        t, bound = time_at_error(curve, float(r[ERROR]))
+        r["mitsuba_ms_at_equal_error"] = t
+        r["time_over_mitsuba"] = float(r["total_ms"]) / t if t > 0 else math.nan
+        # A bound on Mitsuba's time flips on the ratio.
+        r["mitsuba_bound"] = {"=": "=", "<=": ">=", ">=": "<="}[bound]
+    return rows
+
+
+def _key(cfg: BenchConfig, part: Part, scene_name: str, commit: str) -> str:
+    """What a cached scene's rows depend on: the commit, the scene, its part's
+    size, truth, grids and peers, and the timing settings."""
+    text = json.dumps([commit, scene_name, part.width, part.height, part.ground_truth_spp, part.methods, part.peers,
+                       cfg.repeats, cfg.warmup, cfg.max_seconds_per_config], sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def _load_done(path: Path) -> dict[str, list[dict[str, Any]]]:
+    done: dict[str, list[dict[str, Any]]] = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            try:
+                entry = json.loads(line)
+            except json.JSONDecodeError:
+                continue  # a line cut by an interruption
+            done[entry["key"]] = entry["rows"]
+    return done
+
+
+def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None] = print, fresh: bool = False) -> list[dict[str, Any]]:
+    """Runs the benchmark and writes its outputs under ``out``; returns the
+    rows. Each finished scene's rows are appended to ``out/rows.jsonl``: a run
+    interrupted and started again with the same commit and config reuses
+    them (``fresh`` ignores them)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     renderer = make_renderer()
     start = time.perf_counter()
     commit = _commit()  # before the run: what was measured
-    rows: list[dict[str, Any]] = []
     implemented = methods()
-    unknown = [m for m in cfg.methods if m not in implemented]
-    if unknown:
-        raise ParameterError(f"config {cfg.name}: methods {unknown} are not implemented (implemented: {implemented})")
-    for scene_name in cfg.scenes:
-        scene = scenes.get(scene_name, width=cfg.size, height=cfg.size)
-        gt = pm.ground_truth(scene, spp=cfg.ground_truth_spp, noise_seed=1)
-        configs: list[tuple[str, str, dict[str, Any]]] = [("method", "hard", {})]
-        for method, grids in cfg.methods.items():
-            configs += [("method", method, p) for p in expand(grids) if (method, p) != ("hard", {})]
-        configs += [("peer", "reference", {"n_samples": n}) for n in cfg.peers.get("reference_samples", [])]
-        hard_ms = math.nan
-        object_id = None
-        for kind, method, params in configs:
-            result, passes, repeats = _median_render(renderer, scene, method, params, cfg)
-            total = passes.pop("total")
-            if method == "hard" and not params:
-                hard_ms = total
-            row: dict[str, Any] = {
-                "scene": scene_name, "kind": kind, "method": method, "label": label(params),
-                "params": json.dumps(result.params, sort_keys=True), "repeats": repeats,
-                "time_over_hard": total / hard_ms,
-                # The row schema sweeps share, with the medians over the repeats.
-                **result_columns(result, timings=passes, total_ms=total),
-            }
-            row.update(metrics.compare(result, gt))
-            object_id = result.object_id
-            rows.append(row)
-            log(f"{scene_name:20s} {method:9s} {row['label']:50.50s} {row['total_ms']:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
-        spps = cfg.peers.get("mitsuba_spp", [])
-        if spps:
-            pm.ground_truth(scene, spp=min(spps), seed=2, kinds=["visibility", "radiance"], cache=False)  # warm-up: Dr.Jit compiles its kernels
-        for spp in spps:
-            vis_ms, images, repeats = _mitsuba_ms(scene, spp, "visibility", cfg)
-            rad_ms, rad, _ = _mitsuba_ms(scene, spp, "radiance", cfg)
-            # The same silhouette pixels left out of the radiance metrics as for the methods.
-            m = metrics.compare_images(images["visibility"], gt, radiance=rad["radiance"], object_id=object_id)
-            row = {
-                "scene": scene_name, "kind": "peer", "method": "mitsuba", "label": f"spp={spp}",
-                "params": json.dumps({"spp": spp, "variant": pm.variant()}), "repeats": repeats,
-                "timing_source": "cpu_clock", "total_ms": vis_ms, "time_over_hard": vis_ms / hard_ms,
-                "ms_visibility": vis_ms, "ms_radiance": rad_ms, **m,
-            }
-            rows.append(row)
-            log(f"{scene_name:20s} mitsuba   {row['label']:50.50s} {vis_ms:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
+    for part in parts(cfg):
+        unknown = [m for m in part.methods if m not in implemented]
+        if unknown:
+            raise ParameterError(f"config {cfg.name}: methods {unknown} are not implemented (implemented: {implemented})")
+    cache = out / "rows.jsonl"
+    if fresh and cache.exists():
+        cache.unlink()
+    done = _load_done(cache)
+    todo = [(part, name) for part in parts(cfg) for name in part.scenes]
+    rows: list[dict[str, Any]] = []
+    for i, (part, scene_name) in enumerate(todo, 1):
+        key = _key(cfg, part, scene_name, commit)
+        elapsed = time.perf_counter() - start
+        log(f"[{i}/{len(todo)}] {scene_name} at {part.width}x{part.height} ({elapsed / 60:.1f} min so far)" + (": cached" if key in done else ""))
+        if key not in done:
+            done[key] = _scene_rows(renderer, cfg, part, scene_name, log)
+            with open(cache, "a") as f:
+                f.write(json.dumps({"key": key, "rows": done[key]}, default=float) + "\n")
+        rows += done[key]
     write_csv(out / "results.csv", rows)
-    summary = aggregate(rows)
+    main_rows = [r for r in rows if r["size"] == f"{cfg.size}x{cfg.size}"]
+    summary = aggregate(main_rows)
     (out / "pareto.md").write_text(pareto_table(summary))
-    (out / "ratios.md").write_text(ratio_tables(rows, summary))
-    plot_pareto(summary, out / "pareto.png", f"{cfg.name}: {cfg.size}x{cfg.size}, means over {len(cfg.scenes)} scene(s)")
+    (out / "ratios.md").write_text(ratio_tables(main_rows, summary))
+    (out / "suite.md").write_text(suite_tables(rows) + "\n" + what_to_use(rows) + "\n" + MITSUBA_RULE[0].upper() + MITSUBA_RULE[1:] + ".\n")
+    plot_pareto(summary, out / "pareto.png", f"{cfg.name}: {cfg.size}x{cfg.size}, medians over {len(cfg.scenes)} scene(s)")
     scaling_rows = run_scaling(cfg, renderer, log) if cfg.scaling else []
     if scaling_rows:
         write_csv(out / "scaling.csv", scaling_rows)
         plot_scaling(scaling_rows, out / "scaling.png")
     (out / "machine.md").write_text(machine_description(renderer, cfg, time.perf_counter() - start, commit))
-    log((out / "ratios.md").read_text())
-    log(f"wrote {out}/results.csv, pareto.png, pareto.md, ratios.md, machine.md" + (", scaling.csv, scaling.png" if scaling_rows else ""))
+    log((out / "suite.md").read_text())
+    log(f"wrote {out}/results.csv, suite.md, pareto.png, pareto.md, ratios.md, machine.md" + (", scaling.csv, scaling.png" if scaling_rows else ""))
     return rows
 
 
