@@ -81,3 +81,15 @@ def test_parameter_page_is_current() -> None:
 
     page = ROOT / "docs" / "parameters.md"
     assert page.read_text() == parameters_markdown(), "regenerate: python -m penumbra methods --markdown > docs/parameters.md"
+
+
+def test_the_method_table_and_advice_come_from_the_committed_bench_run() -> None:
+    # The README's block is what `python -m penumbra.bench.readme` writes from
+    # benchmarks/results/bench/results.csv (issue 29): rerun it after a bench run.
+    from penumbra.bench import readme
+
+    text = README.read_text()
+    assert readme.START in text and readme.END in text, "the README keeps its generated block"
+    assert readme.update(text, readme.load_rows(readme.RESULTS)) == text, "the README's method table differs from the committed bench results: run python -m penumbra.bench.readme"
+    for method in penumbra.methods():
+        assert f"[`{method}`](docs/methods/{method}.md)" in text, f"{method} has its row"
