@@ -39,6 +39,20 @@ impl Sampling {
     const NAMES: [&'static str; 2] = ["grid", "poisson"];
 }
 
+/// Which texels of the blocker search are blockers: `Plane`, the paper's,
+/// those nearer the light than the receiver's plane; `Cone`, of those, the
+/// ones inside the cone from the receiver to the light at their own depth
+/// (the only points that can hide part of the light from it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BlockerTest {
+    Plane,
+    Cone,
+}
+
+impl BlockerTest {
+    const NAMES: [&'static str; 2] = ["plane", "cone"];
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct PcssParams {
     pub shadow: ShadowMapSettings,
@@ -49,6 +63,7 @@ pub struct PcssParams {
     pub seed: u32,
     pub filter: Filter,
     pub sampling: Sampling,
+    pub blocker_test: BlockerTest,
 }
 
 /// Layout of `PcssSampling` in `methods/pcss/visibility.wgsl`.
@@ -59,6 +74,8 @@ pub struct PcssUniform {
     pub(crate) filter_samples: u32,
     pub(crate) seed: u32,
     pub(crate) poisson: u32,
+    /// 1: `BlockerTest::Cone`.
+    pub(crate) cone: u32,
 }
 
 /// Names of the pass's counters, in order: pixels that ran the blocker
@@ -82,6 +99,12 @@ impl Method for PercentageCloserSoftShadows {
             ParamSpec::int("seed", 0, 0, u32::MAX as i64, "fixes the taps' rotation and jitter"),
             Filter::spec(),
             ParamSpec::choice("sampling", "grid", &Sampling::NAMES, "disk taps: a jittered grid, or a fixed Poisson-disk set"),
+            ParamSpec::choice(
+                "blocker_test",
+                "plane",
+                &BlockerTest::NAMES,
+                "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers)",
+            ),
         ]);
         specs
     }
@@ -94,6 +117,7 @@ impl Method for PercentageCloserSoftShadows {
             seed: p.int("seed") as u32,
             filter: Filter::from_params(p),
             sampling: if p.choice("sampling") == "poisson" { Sampling::Poisson } else { Sampling::Grid },
+            blocker_test: if p.choice("blocker_test") == "cone" { BlockerTest::Cone } else { BlockerTest::Plane },
         };
         if params.sampling == Sampling::Poisson {
             for (name, n) in [("blocker_samples", params.blocker_samples), ("filter_samples", params.filter_samples)] {
@@ -152,6 +176,7 @@ impl Method for PercentageCloserSoftShadows {
                 filter_samples: params.filter_samples,
                 seed: params.seed,
                 poisson: u32::from(params.sampling == Sampling::Poisson),
+                cone: u32::from(params.blocker_test == BlockerTest::Cone),
             };
             let sampling = ctx.parameters("pcss::sampling_uniforms", &sampling);
             let resources = [

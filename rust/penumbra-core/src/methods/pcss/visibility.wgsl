@@ -19,6 +19,8 @@ struct PcssSampling {
     seed: u32,
     // 1: Poisson-disk taps; 0: jittered grid.
     poisson: u32,
+    // 1: blocker_test "cone"; 0: "plane" (the paper's).
+    cone: u32,
 };
 
 struct PcssPixel {
@@ -92,14 +94,25 @@ fn disk_tap(px: vec2<u32>, i: u32, n: u32, stream: u32, rot: vec2<f32>) -> vec2<
 // angle would then find itself a blocker). A texel where nothing was drawn
 // (the far plane: beyond every surface) holds no blocker, even where the ray
 // passes above the receiver's plane's horizon.
-fn texel_blocker(r: Receiver, c: vec2<f32>) -> vec2<f32> {
+struct Texel {
+    // The stored depth along the receiver's axis and the receiver's plane
+    // there (x >= y: no blocker), and the stored point in world space.
+    z: f32,
+    plane: f32,
+    q: vec3<f32>,
+};
+
+fn texel_blocker(r: Receiver, c: vec2<f32>) -> Texel {
     let ls = shadow.light_space;
     let m = receiver_read(ls, r, c);
     let centre = vec2<f32>(map_texel(textureDimensions(shadow_map), m)) + 0.5;
     let stored = map_point_depth(ls, shadow_map, MapPoint(m.layer, centre));
     if (stored >= ls.depth.y) {
-        return vec2<f32>(1.0, 0.0);
+        return Texel(1.0, 0.0, vec3<f32>(0.0));
     }
+    // The stored point: along the read layer's ray, whose depth along that
+    // layer's axis is 1 per unit.
+    let q = shadow.center.xyz + light_ray(ls, m.layer, centre) * stored;
     // The texel centre in the receiver's coordinates.
     var at = centre;
     if (r.layer < 0 || m.layer != r.layer) {
@@ -108,7 +121,24 @@ fn texel_blocker(r: Receiver, c: vec2<f32>) -> vec2<f32> {
     // The read layer's depth per unit depth along the receiver's axis is
     // positive: the direction's dominant axis is the read face's.
     let z = stored / receiver_depth_scale(ls, r, at, m.layer);
-    return vec2<f32>(z, plane_depth(shadow, r, at));
+    return Texel(z, plane_depth(shadow, r, at), q);
+}
+
+// Whether the point q can hide part of the light's sphere from p: the
+// angle at p between q and the light's centre within the sphere's angular
+// radius, plus `slack` (an angle) for the texel's extent. Safe divisions:
+// |c - p| > radius (p is outside the light) and |q - p| > 0 is checked.
+fn in_light_cone(p: vec3<f32>, q: vec3<f32>, slack: f32) -> bool {
+    let to_q = q - p;
+    let to_c = shadow.center.xyz - p;
+    let dq = length(to_q);
+    let dc = length(to_c);
+    if (dq <= 1e-12 * dc || dc <= shadow.center.w) {
+        return true;
+    }
+    let cos_angle = clamp(dot(to_q, to_c) / (dq * dc), -1.0, 1.0);
+    let sin_cone = clamp(shadow.center.w / dc, 0.0, 1.0);
+    return acos(cos_angle) <= asin(sin_cone) + slack;
 }
 
 fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
@@ -148,10 +178,21 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
     var blocker_sum = 0.0;
     var blockers = 0u;
     for (var i = 0u; i < nb * nb; i++) {
-        let c = r.coords + search * disk_tap(px, i, nb, BLOCKER_STREAM, rot);
-        let b = texel_blocker(r, c);
-        if (b.x < b.y - r.bias) {
-            blocker_sum += b.x;
+        let offset = search * disk_tap(px, i, nb, BLOCKER_STREAM, rot);
+        let b = texel_blocker(r, r.coords + offset);
+        var blocker = b.z < b.plane - r.bias;
+        // blocker_test "cone" (a departure from Fernando 2005, step 1, which
+        // takes every texel nearer than the receiver's plane): a point can
+        // hide part of the light from p only inside the cone from p to the
+        // light's sphere; a texel's extent (light_texel_size at its depth,
+        // seen from p) is the slack. Walls and floors beside a receiver (a
+        // room's corners) pass the plane test and fail this one.
+        if (blocker && pcss.cone == 1u) {
+            let extent = light_texel_size(ls, b.z);
+            blocker = in_light_cone(p, b.q, extent / max(length(b.q - p), extent));
+        }
+        if (blocker) {
+            blocker_sum += b.z;
             blockers += 1u;
         }
     }
