@@ -28,6 +28,7 @@ _KEYS = {
     "peers": dict,
     "scaling": dict,
     "large": dict,
+    "radiance": bool,
 }
 
 
@@ -43,6 +44,9 @@ class BenchConfig:
     warmup: int = 1
     #: After one timed render longer than this, no further repeats.
     max_seconds_per_config: float = 20.0
+    #: Radiance too (ground truth, metrics, Mitsuba's radiance timing); false:
+    #: visibility only, the benchmark's question, at a fraction of Mitsuba's time.
+    radiance: bool = True
     #: method -> list of grids; a grid maps each parameter to a list of values
     #: (their product) or to one value.
     methods: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
@@ -63,6 +67,10 @@ def _checked(values: dict[str, Any], where: str) -> dict[str, Any]:
             raise ParameterError(f"{where}: unknown key {key!r} (known: {sorted(_KEYS)})")
         want = _KEYS[key]
         if want is float and isinstance(value, int) and not isinstance(value, bool):
+            continue
+        if want is bool:
+            if not isinstance(value, bool):
+                raise ParameterError(f"{where}: {key!r} must be true or false, got {value!r}")
             continue
         if not isinstance(value, want) or isinstance(value, bool):
             kind = {list: "a list", int: "an integer", float: "a number", dict: "a table"}[want]

@@ -99,7 +99,8 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
     """Every configuration and peer of one scene of ``part``, each row with
     its time over Mitsuba's at the same error (see :func:`with_mitsuba_ratios`)."""
     scene = scenes.get(scene_name, width=part.width, height=part.height)
-    gt = pm.ground_truth(scene, spp=part.ground_truth_spp, noise_seed=1)
+    kinds = ["radiance", "visibility"] if cfg.radiance else ["visibility"]
+    gt = pm.ground_truth(scene, spp=part.ground_truth_spp, noise_seed=1, kinds=kinds)
     size = f"{part.width}x{part.height}"
     configs: list[tuple[str, str, dict[str, Any]]] = [("method", "hard", {})]
     for method, grids in part.methods.items():
@@ -126,12 +127,14 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
         log(f"{scene_name[:30]:30s} {method:9s} {row['label']:40.40s} {row['total_ms']:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
     spps = part.peers.get("mitsuba_spp", [])
     if spps:
-        pm.ground_truth(scene, spp=min(spps), seed=2, kinds=["visibility", "radiance"], cache=False)  # warm-up: Dr.Jit compiles its kernels
+        pm.ground_truth(scene, spp=min(spps), seed=2, kinds=kinds, cache=False)  # warm-up: Dr.Jit compiles its kernels
     for spp in spps:
         vis_ms, images, repeats = _mitsuba_ms(scene, spp, "visibility", cfg)
-        rad_ms, rad, _ = _mitsuba_ms(scene, spp, "radiance", cfg)
+        rad_ms, rad = math.nan, {}
+        if cfg.radiance:
+            rad_ms, rad, _ = _mitsuba_ms(scene, spp, "radiance", cfg)
         # The same silhouette pixels left out of the radiance metrics as for the methods.
-        m = metrics.compare_images(images["visibility"], gt, radiance=rad["radiance"], object_id=object_id)
+        m = metrics.compare_images(images["visibility"], gt, radiance=rad.get("radiance"), object_id=object_id)
         row = {
             "scene": scene_name, "size": size, "kind": "peer", "method": "mitsuba", "label": f"spp={spp}",
             "params": json.dumps({"spp": spp, "variant": pm.variant()}), "repeats": repeats,
@@ -174,7 +177,7 @@ def _key(cfg: BenchConfig, part: Part, scene_name: str, commit: str) -> str:
     """What a cached scene's rows depend on: the commit, the scene, its part's
     size, truth, grids and peers, and the timing settings."""
     text = json.dumps([commit, scene_name, part.width, part.height, part.ground_truth_spp, part.methods, part.peers,
-                       cfg.repeats, cfg.warmup, cfg.max_seconds_per_config], sort_keys=True)
+                       cfg.repeats, cfg.warmup, cfg.max_seconds_per_config, cfg.radiance], sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
