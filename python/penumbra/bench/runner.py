@@ -130,7 +130,7 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
         pm.ground_truth(scene, spp=min(spps), seed=2, kinds=kinds, cache=False)  # warm-up: Dr.Jit compiles its kernels
     for spp in spps:
         vis_ms, images, repeats = _mitsuba_ms(scene, spp, "visibility", cfg)
-        rad_ms, rad = math.nan, {}
+        rad_ms, rad = math.nan, dict[str, np.ndarray]()
         if cfg.radiance:
             rad_ms, rad, _ = _mitsuba_ms(scene, spp, "radiance", cfg)
         # The same silhouette pixels left out of the radiance metrics as for the methods.
