@@ -242,14 +242,17 @@ def suite_tables(rows: list[dict[str, Any]]) -> str:
     for size, entries in by_size.items():
         n = len({r["scene"] for _, _, g in entries for r in g})
         out += [f"### {size}, {n} scenes", "",
-                "| method | setting | penumbra RMSE median | worst | stray % median | worst | time / hard median | worst | time / Mitsuba at equal error, median |",
-                "|---|---|---|---|---|---|---|---|---|"]
+                "| method | setting | penumbra RMSE median | worst | scenes at most 0.5x `hard`'s | stray % median | worst | scenes over 0.5% stray "
+                "| time / hard median | worst | time / Mitsuba at equal error, median |",
+                "|---|---|---|---|---|---|---|---|---|---|---|"]
+        hard = {r["scene"]: float(r[ERROR]) for m, lab, g in entries if (m, lab) == ("hard", "default") for r in g}
         for method, lab, g in entries:
             err = [float(r[ERROR]) for r in g]
+            half = sum(float(r[ERROR]) <= 0.5 * hard[r["scene"]] for r in g if r["scene"] in hard)
             stray = [100 * float(r.get("stray_fraction") or 0.0) for r in g]
             over = [float(r["time_over_hard"]) for r in g]
-            out.append(f"| {method} | {lab} | {np.median(err):.4f} | {max(err):.4f} | {np.median(stray):.2f} | {max(stray):.2f} | "
-                       f"{np.median(over):.2f} | {max(over):.2f} | {'-' if method == 'mitsuba' else _median_ratio(g)} |")
+            out.append(f"| {method} | {lab} | {np.median(err):.4f} | {max(err):.4f} | {half} of {len(g)} | {np.median(stray):.2f} | {max(stray):.2f} | "
+                       f"{sum(x > 0.5 for x in stray)} | {np.median(over):.2f} | {max(over):.2f} | {'-' if method == 'mitsuba' else _median_ratio(g)} |")
         out.append("")
     return "\n".join(out)
 
