@@ -24,8 +24,15 @@
 //! cargo run --release --example gpu_timings -p penumbra-core -- \
 //!     [--scenes a,b] [--methods a,b] [--size 1920x1080] [--repeats 5] [--warmup 1] \
 //!     [--meshes ../shared/meshes] [--out FILE.json] [--out FILE.csv] \
-//!     [--timing auto|gpu|cpu] [--max-seconds 20] [--budget-seconds 0]
+//!     [--timing auto|gpu|cpu] [--max-seconds 20] [--budget-seconds 0] \
+//!     [--set METHOD.KEY=VALUE]... [--adapter-only]
 //! ```
+//!
+//! `--set reference.n_samples=64` renders a method with a parameter other
+//! than its default (repeatable; the JSON's `settings` lists them).
+//!
+//! `--adapter-only` prints the adapter line and exits: 0 for a hardware
+//! adapter, 3 for a software one (lavapipe), 1 when there is none.
 //!
 //! `--out` may be given more than once: a `.csv` name gets one row per scene
 //! and method (a column per pass), any other name JSON. Each file is rewritten
@@ -38,8 +45,8 @@ use std::time::Instant;
 
 use glam::{DVec3, Mat4, Vec3};
 use penumbra_core::{
-    adapter_summary, AdapterSummary, Camera, Error, MethodConfig, Mesh, Outputs, RenderOptions, Renderer, Scene, SphereLight,
-    REGISTRY,
+    adapter_summary, AdapterSummary, Camera, Error, MethodConfig, Mesh, Outputs, ParamValue, RenderOptions, Renderer, Scene,
+    SphereLight, REGISTRY,
 };
 
 /// The built-in scenes of `python/penumbra/scenes.py`, the default first.
@@ -77,10 +84,14 @@ pub struct Options {
     pub max_seconds: f64,
     /// No new scene and method starts after this many seconds of the run (0: no limit).
     pub budget_seconds: f64,
+    /// Print the adapter the renderer would pick and stop.
+    pub adapter_only: bool,
+    /// Parameters other than the defaults, per method (`--set METHOD.KEY=VALUE`).
+    pub params: BTreeMap<String, BTreeMap<String, ParamValue>>,
 }
 
 const USAGE: &str = "usage: gpu_timings [--scenes a,b] [--methods a,b] [--size WxH] [--repeats N] [--warmup N] \
-[--meshes DIR] [--out FILE.json|FILE.csv]... [--timing auto|gpu|cpu] [--max-seconds S] [--budget-seconds S]";
+[--meshes DIR] [--out FILE.json|FILE.csv]... [--timing auto|gpu|cpu] [--max-seconds S] [--budget-seconds S] [--set METHOD.KEY=VALUE]... [--adapter-only]";
 
 fn list(value: &str) -> Vec<String> {
     value.split(',').map(str::trim).filter(|s| !s.is_empty()).map(str::to_owned).collect()
@@ -104,12 +115,18 @@ pub fn parse_args(args: &[String]) -> Result<Options, String> {
         timing: Timing::Auto,
         max_seconds: 20.0,
         budget_seconds: 0.0,
+        adapter_only: false,
+        params: BTreeMap::new(),
     };
     let mut scenes = None;
     let mut it = args.iter();
     while let Some(flag) = it.next() {
         if flag == "-h" || flag == "--help" {
             return Err(USAGE.to_owned());
+        }
+        if flag == "--adapter-only" {
+            o.adapter_only = true;
+            continue;
         }
         let value = it.next().ok_or_else(|| format!("{flag} needs a value\n{USAGE}"))?;
         match flag.as_str() {
@@ -137,11 +154,16 @@ pub fn parse_args(args: &[String]) -> Result<Options, String> {
             }
             "--max-seconds" => o.max_seconds = number(flag, value)?,
             "--budget-seconds" => o.budget_seconds = number(flag, value)?,
+            "--set" => {
+                let parsed = value.split_once('.').and_then(|(m, kv)| kv.split_once('=').map(|(k, v)| (m, k, v)));
+                let (method, key, v) = parsed.ok_or_else(|| format!("--set: expected METHOD.KEY=VALUE, got {value:?}"))?;
+                o.params.entry(method.to_owned()).or_default().insert(key.to_owned(), param_value(v));
+            }
             _ => return Err(format!("unknown option {flag:?}\n{USAGE}")),
         }
     }
     let known: Vec<&str> = REGISTRY.iter().map(|r| r.name).collect();
-    if let Some(bad) = o.methods.iter().find(|m| !known.contains(&m.as_str())) {
+    if let Some(bad) = o.methods.iter().chain(o.params.keys()).find(|m| !known.contains(&m.as_str())) {
         return Err(format!("--methods: unknown method {bad:?}; registered: {}", known.join(", ")));
     }
     o.scenes = scenes.unwrap_or_else(|| BUILTIN_SCENES.iter().chain(MESH_FILES.iter()).map(|s| (*s).to_owned()).collect());
@@ -152,6 +174,17 @@ pub fn parse_args(args: &[String]) -> Result<Options, String> {
         ));
     }
     Ok(o)
+}
+
+/// A parameter value as written: an integer, a float, true or false, else a string.
+fn param_value(text: &str) -> ParamValue {
+    match (text.parse::<i64>(), text.parse::<f64>(), text) {
+        (Ok(i), _, _) => ParamValue::Int(i),
+        (_, Ok(f), _) => ParamValue::Float(f),
+        (_, _, "true" | "True") => ParamValue::Bool(true),
+        (_, _, "false" | "False") => ParamValue::Bool(false),
+        _ => ParamValue::Str(text.into()),
+    }
 }
 
 fn is_mesh_file(name: &str) -> bool {
@@ -496,6 +529,12 @@ impl Report {
             a.is_software
         );
         let o = &self.options;
+        let settings: Vec<String> = o
+            .params
+            .iter()
+            .flat_map(|(m, kv)| kv.iter().map(move |(k, v)| format!("{}: {}", json_string(&format!("{m}.{k}")), json_string(&v.to_string()))))
+            .collect();
+        s += &format!("  \"settings\": {{{}}},\n", settings.join(", "));
         s += &format!(
             "  \"timing_source\": {},\n  \"width\": {},\n  \"height\": {},\n  \"warmup\": {},\n  \"repeats\": {},\n  \"seconds\": {:.1},\n  \"rows\": [",
             json_string(self.timing_source),
@@ -598,6 +637,14 @@ pub fn describe(r: &Row) -> String {
     }
 }
 
+/// The adapter, as the first line of a run prints it.
+pub fn adapter_line(a: &AdapterSummary) -> String {
+    format!(
+        "adapter: {} | backend {} | {} | driver {} {} | timestamps {} | ray queries {}",
+        a.name, a.backend, a.device_type, a.driver, a.driver_info, a.timestamp_queries, a.ray_queries
+    )
+}
+
 fn status_of(e: &Error) -> Status {
     match e {
         Error::MissingFeature(why) => Status::Unsupported(why.clone()),
@@ -608,7 +655,7 @@ fn status_of(e: &Error) -> Status {
 /// Times one method on one scene.
 fn measure(renderer: &Renderer, scene: &Scene, camera: &Camera, name: &str, scene_name: &str, o: &Options) -> Row {
     let mut row = Row::new(scene_name, name, Status::Ok);
-    let config = match MethodConfig::parse(name, &BTreeMap::new()) {
+    let config = match MethodConfig::parse(name, o.params.get(name).unwrap_or(&BTreeMap::new())) {
         Ok(c) => c,
         Err(e) => return Row { status: status_of(&e), ..row },
     };
@@ -665,16 +712,16 @@ pub fn run(o: &Options, log: &mut dyn Write) -> Result<Report, String> {
     let renderer = Renderer::with_pass_cache(use_timestamps, false).map_err(|e| e.to_string())?;
     let adapter = renderer.adapter().clone();
     let timing_source = if renderer.uses_timestamps() { "gpu_timestamps" } else { "cpu_clock" };
-    let _ = writeln!(
-        log,
-        "adapter: {} | backend {} | {} | driver {} {} | timestamps {} | ray queries {}",
-        adapter.name, adapter.backend, adapter.device_type, adapter.driver, adapter.driver_info, adapter.timestamp_queries, adapter.ray_queries
-    );
+    let _ = writeln!(log, "{}", adapter_line(&adapter));
     let _ = writeln!(
         log,
         "size {}x{}, warm-up {}, repeats {} (at most {} s each), timing {timing_source}, no pass cache; times in ms",
         o.width, o.height, o.warmup, o.repeats, o.max_seconds
     );
+    for (method, kv) in &o.params {
+        let set: Vec<String> = kv.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        let _ = writeln!(log, "{method}: {}", set.join(" "));
+    }
     let mut report = Report { adapter, timing_source, options: o.clone(), rows: Vec::new(), seconds: 0.0 };
     let camera = camera(o.width, o.height);
     for scene_name in &o.scenes {
@@ -709,6 +756,18 @@ fn main() {
             std::process::exit(2);
         }
     };
+    if options.adapter_only {
+        match adapter_summary() {
+            Ok(a) => {
+                println!("{}", adapter_line(&a));
+                std::process::exit(if a.is_software { 3 } else { 0 });
+            }
+            Err(e) => {
+                eprintln!("gpu_timings: {e}");
+                std::process::exit(1);
+            }
+        }
+    }
     match run(&options, &mut std::io::stdout()) {
         Ok(report) => {
             let failed = report.rows.iter().filter(|r| matches!(r.status, Status::Error(_))).count();
