@@ -612,7 +612,11 @@ impl Report {
         for path in &self.options.out {
             let csv = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
             let text = if csv { self.to_csv() } else { self.to_json() };
-            std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            // Written beside and renamed: a run stopped mid-write leaves the last whole file.
+            let partial = path.with_extension("partial");
+            std::fs::write(&partial, text)
+                .and_then(|()| std::fs::rename(&partial, path))
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
         }
         Ok(())
     }
