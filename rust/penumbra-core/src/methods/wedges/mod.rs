@@ -40,7 +40,7 @@ use crate::passes::shadow_test::ShadowMapSettings;
 use crate::silhouettes::{OpenEdges, Repairs};
 
 pub mod geometry;
-pub use geometry::{bin_wedges, penumbra_wedges, wedge_intensity, Bins, WedgeGpu, WedgeStats, Wedges, TILE};
+pub use geometry::{bin_wedges, coverage_bounds, coverage_term, penumbra_wedges, wedge_intensity, Bins, WedgeGpu, WedgeStats, Wedges, TILE};
 
 /// The values of `repairs`, cumulative in the order docs/methods/wedges.md
 /// measures them; "all" adds the horizon to the last.
@@ -60,6 +60,25 @@ pub struct WedgesParams {
     pub repairs: Repairs,
     /// Where the hard shadow map is read for a pixel inside wedges (`HardTerm`).
     pub hard_term: HardTerm,
+    /// How a wedge's light intensity is computed (`Intensity`).
+    pub intensity: Intensity,
+}
+
+/// How the light intensity s inside a wedge is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Intensity {
+    /// The 2002 paper's interpolation between the front and back planes
+    /// along the side rays, then between the side planes (4.2, Eq. 1-3).
+    Interpolation,
+    /// The edge projected from the pixel onto the light, and the part of the
+    /// light's disk it uncovers (or covers) measured exactly (Assarsson &
+    /// Akenine-Möller 2003's per-pixel coverage). The wedges then only bound
+    /// where an edge matters (`geometry::coverage_bounds`).
+    Coverage,
+}
+
+impl Intensity {
+    pub const NAMES: [&'static str; 2] = ["interpolation", "coverage"];
 }
 
 /// Where the shadow map is read for a pixel inside wedges.
@@ -121,6 +140,12 @@ impl Method for PenumbraWedges {
                 &HardTerm::NAMES,
                 "where the hard shadow map is read inside wedges: at the pixel (each wedge adds s - h), or on the lit side of every holding wedge's quad (each adds s - 1: overlapping casters summed as the paper's count)",
             ),
+            ParamSpec::choice(
+                "intensity",
+                "interpolation",
+                &Intensity::NAMES,
+                "light intensity inside a wedge: the 2002 paper's interpolation between its planes (4.2, Eq. 1-3), or the fraction of the light's disk the edge projected from the pixel covers, computed exactly (Assarsson & Akenine-Möller 2003; falloff and acute_wedges then do nothing)",
+            ),
             ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
             ParamSpec::choice(
                 "open_edges",
@@ -151,6 +176,7 @@ impl Method for PenumbraWedges {
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs,
             hard_term: if p.choice("hard_term") == "lit_side" { HardTerm::LitSide } else { HardTerm::AtPoint },
+            intensity: if p.choice("intensity") == "coverage" { Intensity::Coverage } else { Intensity::Interpolation },
         })
     }
 
@@ -190,7 +216,7 @@ impl Method for PenumbraWedges {
             .f64s(&[light.radius])
             .u32(params.acute_wedges)
             .bytes(params.open_edges.name().as_bytes())
-            .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden)]);
+            .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden), u8::from(params.intensity == Intensity::Coverage)]);
         let mut fresh = false;
         let wedges = frame.cached(PENUMBRA_WEDGES.name, key.finish(), |frame| {
             fresh = true;
@@ -201,7 +227,11 @@ impl Method for PenumbraWedges {
         let intensity = frame.ctx.screen_texture("wedges::intensity");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
             let counter = ctx.counters("wedges::pixels_in_wedge", 1, encoder);
-            let flags = u32::from(params.falloff) | (u32::from(params.repairs.horizon) << 1) | (u32::from(params.hard_term == HardTerm::LitSide) << 2);
+            let coverage = params.intensity == Intensity::Coverage;
+            let flags = u32::from(params.falloff && !coverage)
+                | (u32::from(params.repairs.horizon) << 1)
+                | (u32::from(params.hard_term == HardTerm::LitSide) << 2)
+                | (u32::from(coverage) << 3);
             let test = ctx.parameters("wedges::shadow_test", &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0));
             let settings = ctx.parameters("wedges::settings", &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count] });
             let resources = [
@@ -251,7 +281,9 @@ impl PenumbraWedges {
             if r > 0.0 {
                 let silhouette = ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
                 cache_hits = silhouette.cache_hits;
-                built = penumbra_wedges(&silhouette.edges, l, r, params.acute_wedges, params.repairs.cone);
+                // Coverage measures a corner exactly: extra wedges there would add nothing.
+                let acute = if params.intensity == Intensity::Coverage { 0 } else { params.acute_wedges };
+                built = penumbra_wedges(&silhouette.edges, l, r, acute, params.repairs.cone);
                 built.stats.hidden_edges = silhouette.hidden_edges;
                 built.stats.connectivity = silhouette.connectivity;
                 built.stats.silhouette_edges += silhouette.hidden_edges;
@@ -259,7 +291,8 @@ impl PenumbraWedges {
             let camera = ctx.camera;
             let (projection, _, _) = camera.projection(ctx.prepared.bounds_min, ctx.prepared.bounds_max);
             let view_proj = DMat4::from_cols_array(&(projection * camera.view()).to_cols_array().map(f64::from));
-            let bins = bin_wedges(&built.wedges, view_proj, ctx.size, ctx.prepared.bounds_min.as_dvec3(), ctx.prepared.bounds_max.as_dvec3());
+            let coverage = (params.intensity == Intensity::Coverage).then_some((l, r));
+            let bins = bin_wedges(&built.wedges, view_proj, ctx.size, ctx.prepared.bounds_min.as_dvec3(), ctx.prepared.bounds_max.as_dvec3(), coverage);
             built.stats.culled_wedges = bins.culled;
             built.stats.binned = bins.indices.len();
             // A storage binding may not be empty: one zeroed entry stands for none.
