@@ -62,6 +62,9 @@ pub struct WedgesParams {
     pub hard_term: HardTerm,
     /// How a wedge's light intensity is computed (`Intensity`).
     pub intensity: Intensity,
+    /// Whether a wedge whose quad's lit side is shadowed by something else
+    /// adds nothing (`"gate"`) or its term all the same (`"sum"`, the paper's).
+    pub overlap_gate: bool,
 }
 
 /// How the light intensity s inside a wedge is computed.
@@ -146,6 +149,12 @@ impl Method for PenumbraWedges {
                 &Intensity::NAMES,
                 "light intensity inside a wedge: the 2002 paper's interpolation between its planes (4.2, Eq. 1-3), or the fraction of the light's disk the edge projected from the pixel covers, computed exactly (Assarsson & Akenine-Möller 2003; falloff and acute_wedges then do nothing)",
             ),
+            ParamSpec::choice(
+                "overlap",
+                "sum",
+                &["sum", "gate"],
+                "silhouettes that overlap as the light sees them (folds, several casters): every wedge's term summed, as both papers, or a wedge's term dropped where the map, read just on the lit side of its quad, is in shadow too (something else covers what the edge would uncover)",
+            ),
             ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
             ParamSpec::choice(
                 "open_edges",
@@ -177,6 +186,7 @@ impl Method for PenumbraWedges {
             repairs,
             hard_term: if p.choice("hard_term") == "lit_side" { HardTerm::LitSide } else { HardTerm::AtPoint },
             intensity: if p.choice("intensity") == "coverage" { Intensity::Coverage } else { Intensity::Interpolation },
+            overlap_gate: p.choice("overlap") == "gate",
         })
     }
 
@@ -231,7 +241,8 @@ impl Method for PenumbraWedges {
             let flags = u32::from(params.falloff && !coverage)
                 | (u32::from(params.repairs.horizon) << 1)
                 | (u32::from(params.hard_term == HardTerm::LitSide) << 2)
-                | (u32::from(coverage) << 3);
+                | (u32::from(coverage) << 3)
+                | (u32::from(params.overlap_gate) << 4);
             let test = ctx.parameters("wedges::shadow_test", &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0));
             let settings = ctx.parameters("wedges::settings", &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count] });
             let resources = [

@@ -28,7 +28,7 @@ struct Wedge {
 struct WedgeSettings {
     // x: tile size in pixels; y: tiles per row; z: flags (bit 0: falloff,
     // bit 1: repair "horizon", bit 2: hard_term "lit_side", bit 3: intensity
-    // "coverage"); w: wedge count.
+    // "coverage", bit 4: overlap "gate"); w: wedge count.
     tiles: vec4<u32>,
 };
 
@@ -238,6 +238,24 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                     term = coverage_term(w, p, wedge_test.center.xyz, r);
                 } else {
                     term = wedge_term(w, p);
+                }
+                if (term.y > 0.0 && (settings.tiles.z & 16u) != 0u) {
+                    // overlap "gate": the map read just on the lit side of
+                    // this wedge's quad (margin off its plane, in p's tangent
+                    // plane). Where another surface shadows that side too,
+                    // the edge uncovers nothing the other does not cover
+                    // (an inner fold, a second caster): the wedge adds no
+                    // term. A quad nearly parallel to the receiver keeps it.
+                    let d_gate = dot(w.hard.xyz, p - w.a.xyz);
+                    let along_gate = w.hard.xyz - n * dot(w.hard.xyz, n);
+                    let rate_gate = dot(along_gate, w.hard.xyz);
+                    if (rate_gate > 0.05) {
+                        let probe = p + along_gate * (max(margin - d_gate, 0.0) / rate_gate);
+                        let qg = biased_receiver(wedge_test, probe, n, cos_theta);
+                        if (qg.w > map_depth(wedge_test, shadow_map, qg.xyz)) {
+                            term = vec2<f32>(0.0, 0.0);
+                        }
+                    }
                 }
                 if (term.y > 0.0) {
                     terms = terms + term.x;
