@@ -774,6 +774,116 @@ mod tests {
         }
     }
 
+    /// Whether (x, z) lies inside the polygon (even-odd rule).
+    fn inside(points: &[(f64, f64)], x: f64, z: f64) -> bool {
+        let mut odd = false;
+        for i in 0..points.len() {
+            let (p, q) = (points[i], points[(i + 1) % points.len()]);
+            if (p.1 > z) != (q.1 > z) && x < p.0 + (z - p.1) * (q.0 - p.0) / (q.1 - p.1) {
+                odd = !odd;
+            }
+        }
+        odd
+    }
+
+    /// The fraction of the light's disk (in the plane through `l` facing
+    /// `p`, radius that of the tangent cone there, as the coverage term
+    /// measures it) that the flat polygon at height `y` hides from `p`,
+    /// counted on a fine grid.
+    fn covered_fraction(points: &[(f64, f64)], y: f64, l: DVec3, r: f64, p: DVec3) -> f64 {
+        let axis = l - p;
+        let dist = axis.length();
+        let radius = r * dist / (dist * dist - r * r).sqrt();
+        let (e1, e2) = (axis / dist).any_orthonormal_pair();
+        let n = 400;
+        let (mut hit, mut all) = (0usize, 0usize);
+        for i in 0..n {
+            for j in 0..n {
+                let (u, v) = ((f64::from(i) + 0.5) / f64::from(n) * 2.0 - 1.0, (f64::from(j) + 0.5) / f64::from(n) * 2.0 - 1.0);
+                if u * u + v * v > 1.0 {
+                    continue;
+                }
+                all += 1;
+                let x = l + (e1 * u + e2 * v) * radius;
+                let t = (y - p.y) / (x.y - p.y);
+                let q = p + (x - p) * t;
+                hit += usize::from((0.0..=1.0).contains(&t) && inside(points, q.x, q.z));
+            }
+        }
+        hit as f64 / all as f64
+    }
+
+    #[test]
+    fn coverage_terms_of_a_closed_loop_and_the_hard_shadow_give_the_covered_fraction() {
+        // A square and an L (concave), under a light smaller and one larger
+        // than they are; ground points in the umbra, the penumbra, outside.
+        let l = DVec3::new(0.2, 5.0, 0.1);
+        let square = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+        let ell = [(-1.0, -1.0), (1.0, -1.0), (1.0, -0.2), (-0.2, -0.2), (-0.2, 1.0), (-1.0, 1.0)];
+        let mut checked = 0;
+        for points in [&square[..], &ell[..]] {
+            let edges = polygon(points, 2.0, l);
+            for r in [0.6, 2.5] {
+                let w = penumbra_wedges(&edges, l, r, 0, false);
+                for x in [-2.0, -1.4, -0.9, -0.3, 0.0, 0.4, 1.1, 1.6, 2.4] {
+                    for z in [-1.8, -0.6, 0.1, 0.9, 1.7] {
+                        let p = DVec3::new(x, 0.0, z);
+                        // The hard shadow: the light centre seen through the polygon.
+                        let t = (2.0 - p.y) / (l.y - p.y);
+                        let q = p + (l - p) * t;
+                        let hard = if inside(points, q.x, q.z) { 0.0 } else { 1.0 };
+                        let v = hard + w.wedges.iter().map(|x| coverage_term(x, p, l, r)).sum::<f64>();
+                        let truth = 1.0 - covered_fraction(points, 2.0, l, r, p);
+                        // The grid counts to about 1e-3 (400 x 400 over the disk).
+                        assert!((v - truth).abs() < 4e-3, "r {r} at {p}: {v} against {truth}");
+                        checked += usize::from(truth > 0.02 && truth < 0.98);
+                    }
+                }
+            }
+        }
+        assert!(checked > 40, "{checked} penumbra points");
+    }
+
+    #[test]
+    fn coverage_bounds_hold_every_point_the_edge_can_shadow() {
+        let l = DVec3::new(0.3, 5.0, -0.2);
+        let edges = polygon(&[(-1.0, -1.0), (1.0, -1.2), (1.3, 0.9), (-0.8, 1.1)], 2.0, l);
+        // Plus an edge pointing away from the light and one pointing back at it.
+        let mut all = edges.clone();
+        all.push(edge(DVec3::new(2.0, 2.0, 0.0), DVec3::new(2.2, 1.0, 0.1), 10, 11));
+        all.push(edge(DVec3::new(-2.0, 1.0, 0.0), DVec3::new(-2.1, 2.5, 0.2), 12, 13));
+        for r in [0.2, 1.0, 2.0] {
+            let w = penumbra_wedges(&all, l, r, 0, false);
+            let mut state = 12345u64;
+            let mut uniform = || {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            };
+            for x in &w.wedges {
+                let bounds = coverage_bounds(x, l, r);
+                let v = |c: [f32; 4]| DVec3::new(f64::from(c[0]), f64::from(c[1]), f64::from(c[2]));
+                let (a, b) = (v(x.a), v(x.b));
+                for _ in 0..2000 {
+                    // q on the edge, s on the sphere, p beyond q seen from s.
+                    let q = a + (b - a) * uniform();
+                    let d = DVec3::new(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalize_or_zero();
+                    let s = l + d * (r * uniform().cbrt());
+                    let p = q + (q - s) * (4.0 * uniform());
+                    for (n, dd) in &bounds {
+                        assert!(n.dot(p) <= dd + 1e-9 * (1.0 + dd.abs()), "{p} outside {n} {dd}");
+                    }
+                }
+                // And where the term is not zero, the point is inside.
+                for _ in 0..500 {
+                    let p = DVec3::new(uniform() * 8.0 - 4.0, uniform() * 2.0 - 0.5, uniform() * 8.0 - 4.0);
+                    if coverage_term(x, p, l, r) != 0.0 {
+                        assert!(bounds.iter().all(|(n, dd)| n.dot(p) <= dd + 1e-9), "{p}");
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn bins_cover_the_wedges_footprint_and_cull_what_leaves_the_box() {
         let l = DVec3::new(0.0, 6.0, 0.0);

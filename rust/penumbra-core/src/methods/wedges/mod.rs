@@ -1,4 +1,12 @@
-//! Method `wedges`: penumbra wedges (Akenine-Möller & Assarsson 2002).
+//! Method `wedges`: penumbra wedges (Akenine-Möller & Assarsson 2002), by
+//! default with the per-pixel coverage of their 2003 successor (Assarsson &
+//! Akenine-Möller, "A geometry-based soft shadow volume algorithm using
+//! graphics hardware"): the wedge only bounds where an edge matters, and
+//! inside it the edge, projected from the pixel onto the light, gives the
+//! covered part of the light's disk exactly (`intensity`; the 2002
+//! interpolation of 4.2 is `intensity="interpolation"`). Where silhouettes
+//! overlap as the light sees them, `overlap="gate"` drops the terms of an
+//! edge with another surface right behind it (docs/methods/wedges.md).
 //!
 //! Pass 1 is the shadow map of `hard`, the hard shadow from the light
 //! centre. Pass 2 builds, on the CPU, a penumbra wedge per silhouette edge
@@ -44,7 +52,7 @@ pub use geometry::{bin_wedges, coverage_bounds, coverage_term, penumbra_wedges, 
 
 /// The values of `repairs`, cumulative in the order docs/methods/wedges.md
 /// measures them; "all" adds the horizon to the last.
-pub const REPAIR_LEVELS: [&str; 4] = ["all", "none", "hidden", "cone+hidden"];
+pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "hidden", "cone+hidden", "cone+horizon"];
 
 /// The wedges and their screen bins (pass 2), as the pass cache keeps them.
 pub const PENUMBRA_WEDGES: CachedPass = CachedPass { name: "penumbra_wedges", capacity: 1 };
@@ -62,8 +70,9 @@ pub struct WedgesParams {
     pub hard_term: HardTerm,
     /// How a wedge's light intensity is computed (`Intensity`).
     pub intensity: Intensity,
-    /// Whether a wedge whose quad's lit side is shadowed by something else
-    /// adds nothing (`"gate"`) or its term all the same (`"sum"`, the paper's).
+    /// Whether a wedge adds nothing where the map just outside its edge's
+    /// hard shadow is shadowed by something else (`"gate"`), or its term all
+    /// the same (`"sum"`, both papers').
     pub overlap_gate: bool,
 }
 
@@ -124,7 +133,7 @@ pub struct PenumbraWedges {
 
 impl Method for PenumbraWedges {
     const NAME: &'static str = "wedges";
-    const PAPER: &'static str = "penumbra wedges (Akenine-Möller & Assarsson 2002, 4.1-4.2)";
+    const PAPER: &'static str = "penumbra wedges (Akenine-Möller & Assarsson 2002, 4.1-4.2; per-pixel coverage of Assarsson & Akenine-Möller 2003)";
     type Params = WedgesParams;
 
     fn specs() -> Vec<ParamSpec> {
@@ -145,15 +154,15 @@ impl Method for PenumbraWedges {
             ),
             ParamSpec::choice(
                 "intensity",
-                "interpolation",
+                "coverage",
                 &Intensity::NAMES,
                 "light intensity inside a wedge: the 2002 paper's interpolation between its planes (4.2, Eq. 1-3), or the fraction of the light's disk the edge projected from the pixel covers, computed exactly (Assarsson & Akenine-Möller 2003; falloff and acute_wedges then do nothing)",
             ),
             ParamSpec::choice(
                 "overlap",
-                "sum",
+                "gate",
                 &["sum", "gate"],
-                "silhouettes that overlap as the light sees them (folds, several casters): every wedge's term summed, as both papers, or a wedge's term dropped where the map, read just on the lit side of its quad, is in shadow too (something else covers what the edge would uncover)",
+                "silhouettes that overlap as the light sees them (folds, several casters): every wedge's term summed, as both papers, or a wedge's term dropped where the map, read at the pixel moved just outside the hard shadow its edge casts, is in shadow too (another surface right behind the edge covers what it would uncover or hide)",
             ),
             ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
             ParamSpec::choice(
@@ -166,7 +175,7 @@ impl Method for PenumbraWedges {
                 "repairs",
                 "all",
                 &REPAIR_LEVELS,
-                "departures from the paper for real meshes, cumulative: none, hidden (no wedge for silhouette edges hidden from the light centre), cone+hidden (shared side lines kept in their vertex's light cone), all (+ the light below the receiver's horizon hidden)",
+                "departures from the paper for real meshes, cumulative: none, hidden (no wedge for silhouette edges hidden from the light centre), cone+hidden (shared side lines kept in their vertex's light cone), all (+ the light below the receiver's horizon hidden); cone+horizon is all but hidden",
             ),
         ]);
         specs

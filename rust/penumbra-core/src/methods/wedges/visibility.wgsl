@@ -240,17 +240,21 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                     term = wedge_term(w, p);
                 }
                 if (term.y > 0.0 && (settings.tiles.z & 16u) != 0u) {
-                    // overlap "gate": the map read just on the lit side of
-                    // this wedge's quad (margin off its plane, in p's tangent
-                    // plane). Where another surface shadows that side too,
-                    // the edge uncovers nothing the other does not cover
-                    // (an inner fold, a second caster): the wedge adds no
-                    // term. A quad nearly parallel to the receiver keeps it.
+                    // overlap "gate": the map read at p moved, in its
+                    // tangent plane, to just off the lit side of this
+                    // wedge's quad (margin off its plane: just outside the
+                    // hard shadow this edge casts). If that point is in
+                    // shadow, another surface lies right behind the edge as
+                    // the light sees it (an inner fold, a second caster),
+                    // and it covers what this edge would uncover (p behind
+                    // the quad) or already covers what it would hide (p in
+                    // front): the wedge adds nothing. A quad nearly
+                    // parallel to the receiver keeps its term.
                     let d_gate = dot(w.hard.xyz, p - w.a.xyz);
                     let along_gate = w.hard.xyz - n * dot(w.hard.xyz, n);
                     let rate_gate = dot(along_gate, w.hard.xyz);
                     if (rate_gate > 0.05) {
-                        let probe = p + along_gate * (max(margin - d_gate, 0.0) / rate_gate);
+                        let probe = p + along_gate * ((margin - d_gate) / rate_gate);
                         let qg = biased_receiver(wedge_test, probe, n, cos_theta);
                         if (qg.w > map_depth(wedge_test, shadow_map, qg.xyz)) {
                             term = vec2<f32>(0.0, 0.0);
