@@ -381,6 +381,127 @@ pub fn wedge_intensity(w: &WedgeGpu, p: DVec3) -> Option<f64> {
     Some(if t_l + t_r <= 0.0 { 0.5 * (s_l + s_r) } else { (t_r * s_l + t_l * s_r) / (t_l + t_r) })
 }
 
+/// The half-spaces `n.x <= d` that hold every point whose view of the
+/// sphere light (centre `l`, radius `r`) the edge `a..b` of `w` crosses: the
+/// region where the per-pixel coverage term of `coverage_term` can be
+/// non-zero (the segment's penumbra volume, `{q + t (q - x)}` for q on the
+/// edge, x in the sphere, t >= 0). Two planes through the edge's line
+/// tangent to the sphere, and at each end a plane through the vertex,
+/// tangent to the sphere, with the sphere on one side and the edge on the
+/// other (left out where no such plane contains the quad normal: an edge
+/// pointing back towards the light). Conservative, unlike 4.1's planes
+/// through c -+ r n, which cut the sphere.
+pub fn coverage_bounds(w: &WedgeGpu, l: DVec3, r: f64) -> Vec<(DVec3, f64)> {
+    let v = |x: [f32; 4]| DVec3::new(f64::from(x[0]), f64::from(x[1]), f64::from(x[2]));
+    let (a, b, dir) = (v(w.a), v(w.b), v(w.dir));
+    let mut out = Vec::with_capacity(4);
+    if (b - a).length() <= 0.0 {
+        return out;
+    }
+    // Across the edge's line: the cone of directions about -u of half-angle
+    // asin(r / d), u towards the light in the plane perpendicular to dir.
+    let to_light = l - a;
+    let across = to_light - dir * to_light.dot(dir);
+    let d = across.length();
+    if d > r {
+        let u = across / d;
+        let w2 = dir.cross(u);
+        let sin = r / d;
+        let cos = (1.0 - sin * sin).max(0.0).sqrt();
+        for side in [1.0, -1.0] {
+            // Inward normal m of a boundary line: m.(p - a) >= 0 inside.
+            let m = -u * sin + w2 * (cos * side);
+            out.push((-m, -m.dot(a)));
+        }
+    }
+    // At each end: m = alpha t + beta s, t from the light to the vertex, s
+    // perpendicular to it towards the other end, m.(l - v) = -r.
+    for (vertex, along) in [(a, dir), (b, -dir)] {
+        let to = vertex - l;
+        let dist = to.length();
+        if dist <= r {
+            continue;
+        }
+        let t = to / dist;
+        let s_raw = along - t * along.dot(t);
+        if s_raw.length() <= 1e-12 {
+            continue;
+        }
+        let s = s_raw.normalize();
+        let alpha = r / dist;
+        let m = t * alpha + s * (1.0 - alpha * alpha).max(0.0).sqrt();
+        if m.dot(along) >= 0.0 {
+            out.push((-m, -m.dot(vertex)));
+        }
+    }
+    out
+}
+
+/// The signed area of the part of the unit disk inside the triangle (0, p, q)
+/// (positive when p to q turns anticlockwise about 0).
+fn disk_triangle(p: glam::DVec2, q: glam::DVec2) -> f64 {
+    let sector = |x: glam::DVec2, y: glam::DVec2| 0.5 * x.perp_dot(y).atan2(x.dot(y));
+    let e = q - p;
+    let (qa, qb, qc) = (e.length_squared(), 2.0 * p.dot(e), p.length_squared() - 1.0);
+    let disc = qb * qb - 4.0 * qa * qc;
+    if qa <= 0.0 || disc <= 0.0 {
+        return sector(p, q);
+    }
+    let root = disc.sqrt();
+    let (t0, t1) = (((-qb - root) / (2.0 * qa)).max(0.0), ((-qb + root) / (2.0 * qa)).min(1.0));
+    if t0 >= t1 {
+        return sector(p, q);
+    }
+    let (x0, x1) = (p + e * t0, p + e * t1);
+    sector(p, x0) + 0.5 * x0.perp_dot(x1) + sector(x1, q)
+}
+
+/// The per-pixel coverage term of wedge `w` at `p` for the sphere light (c,
+/// r), in f64 (the shader's twin, `coverage_term` in visibility.wgsl; for
+/// tests): the edge is projected from p onto the plane through c facing p,
+/// and the part of the light's disk inside the angular sector of the
+/// projected edge that lies beyond it (away from c) is the fraction the
+/// edge moves from the hard shadow's value: visible when p is behind the
+/// quad (h = 0), hidden when in front (h = 1). Returns that fraction, s - h,
+/// with s the light intensity; 0 where the projected edge misses the disk.
+/// The terms of a closed loop sum with the hard shadow to the exact covered
+/// fraction of the disk (the fan decomposition of the projected polygon
+/// about c).
+pub fn coverage_term(w: &WedgeGpu, p: DVec3, c: DVec3, r: f64) -> f64 {
+    let v = |x: [f32; 4]| DVec3::new(f64::from(x[0]), f64::from(x[1]), f64::from(x[2]));
+    let (a, b) = (v(w.a), v(w.b));
+    let axis = c - p;
+    let dist = axis.length();
+    if dist <= r * 1.0001 {
+        return 0.0;
+    }
+    let z = axis / dist;
+    // Clip the edge to the half-space in front of p (depth along z >= eps).
+    let eps = 1e-4 * dist;
+    let (da, db) = ((a - p).dot(z), (b - p).dot(z));
+    if da < eps && db < eps {
+        return 0.0;
+    }
+    let cut = |x: DVec3, dx: f64, y: DVec3, dy: f64| if dx >= eps { x } else { x + (y - x) * ((eps - dx) / (dy - dx)) };
+    let (a, b) = (cut(a, da, b, db), cut(b, db, a, da));
+    // The disk seen from p, in the plane through c: radius of the tangent cone there.
+    let radius = r * dist / (dist * dist - r * r).sqrt();
+    let (e1, e2) = z.any_orthonormal_pair();
+    let project = |x: DVec3| {
+        let q = (x - p) * (dist / (x - p).dot(z)) - axis;
+        glam::DVec2::new(q.dot(e1), q.dot(e2)) / radius
+    };
+    let (pa, pb) = (project(a), project(b));
+    let sector = 0.5 * pa.perp_dot(pb).atan2(pa.dot(pb));
+    let beyond = (sector - disk_triangle(pa, pb)).abs() / std::f64::consts::PI;
+    let lit = v(w.hard).dot(p - v(w.a)) > 0.0;
+    if lit {
+        -beyond
+    } else {
+        beyond
+    }
+}
+
 /// Screen-space bins of the wedges: tiles of `TILE` pixels, each with the
 /// wedges whose part inside the scene's box projects onto it (CSR form).
 pub const TILE: u32 = 16;
@@ -425,7 +546,7 @@ fn polyhedron_vertices(planes: &[(DVec3, f64)]) -> Vec<DVec3> {
 /// (world to clip, wgpu conventions: depth in [0, 1]), clipping each wedge
 /// to the box `lo..hi` (every receiver lies in it) and to the camera's near
 /// plane, so that every corner left projects in front of the camera.
-pub fn bin_wedges(wedges: &[WedgeGpu], view_proj: DMat4, size: (u32, u32), lo: DVec3, hi: DVec3) -> Bins {
+pub fn bin_wedges(wedges: &[WedgeGpu], view_proj: DMat4, size: (u32, u32), lo: DVec3, hi: DVec3, coverage: Option<(DVec3, f64)>) -> Bins {
     let tiles_x = size.0.div_ceil(TILE);
     let tiles_y = size.1.div_ceil(TILE);
     let pad = (hi - lo).length() * 1e-3 + 1e-6;
@@ -439,14 +560,25 @@ pub fn bin_wedges(wedges: &[WedgeGpu], view_proj: DMat4, size: (u32, u32), lo: D
     let mut culled = 0;
     for w in wedges {
         let (a, b) = (v(w.a), v(w.b));
+        // A zero-length edge covers nothing.
+        if coverage.is_some() && a == b {
+            culled += 1;
+            ranges.push(None);
+            continue;
+        }
         // As n.x <= d: front <= 0, back >= 0, left >= 0, right >= 0, the box, the near plane.
-        let mut planes = vec![
-            (v(w.front), v(w.front).dot(a)),
-            (-v(w.back), -v(w.back).dot(a)),
-            (-v(w.left), -v(w.left).dot(a)),
-            (-v(w.right), -v(w.right).dot(b)),
-            near,
-        ];
+        // With `coverage` (the light's centre and radius), the region where
+        // the coverage term can be non-zero (`coverage_bounds`) instead.
+        let mut planes = match coverage {
+            Some((l, r)) => coverage_bounds(w, l, r),
+            None => vec![
+                (v(w.front), v(w.front).dot(a)),
+                (-v(w.back), -v(w.back).dot(a)),
+                (-v(w.left), -v(w.left).dot(a)),
+                (-v(w.right), -v(w.right).dot(b)),
+            ],
+        };
+        planes.push(near);
         for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
             planes.push((axis, axis.dot(hi)));
             planes.push((-axis, -axis.dot(lo)));
@@ -642,6 +774,116 @@ mod tests {
         }
     }
 
+    /// Whether (x, z) lies inside the polygon (even-odd rule).
+    fn inside(points: &[(f64, f64)], x: f64, z: f64) -> bool {
+        let mut odd = false;
+        for i in 0..points.len() {
+            let (p, q) = (points[i], points[(i + 1) % points.len()]);
+            if (p.1 > z) != (q.1 > z) && x < p.0 + (z - p.1) * (q.0 - p.0) / (q.1 - p.1) {
+                odd = !odd;
+            }
+        }
+        odd
+    }
+
+    /// The fraction of the light's disk (in the plane through `l` facing
+    /// `p`, radius that of the tangent cone there, as the coverage term
+    /// measures it) that the flat polygon at height `y` hides from `p`,
+    /// counted on a fine grid.
+    fn covered_fraction(points: &[(f64, f64)], y: f64, l: DVec3, r: f64, p: DVec3) -> f64 {
+        let axis = l - p;
+        let dist = axis.length();
+        let radius = r * dist / (dist * dist - r * r).sqrt();
+        let (e1, e2) = (axis / dist).any_orthonormal_pair();
+        let n = 400;
+        let (mut hit, mut all) = (0usize, 0usize);
+        for i in 0..n {
+            for j in 0..n {
+                let (u, v) = ((f64::from(i) + 0.5) / f64::from(n) * 2.0 - 1.0, (f64::from(j) + 0.5) / f64::from(n) * 2.0 - 1.0);
+                if u * u + v * v > 1.0 {
+                    continue;
+                }
+                all += 1;
+                let x = l + (e1 * u + e2 * v) * radius;
+                let t = (y - p.y) / (x.y - p.y);
+                let q = p + (x - p) * t;
+                hit += usize::from((0.0..=1.0).contains(&t) && inside(points, q.x, q.z));
+            }
+        }
+        hit as f64 / all as f64
+    }
+
+    #[test]
+    fn coverage_terms_of_a_closed_loop_and_the_hard_shadow_give_the_covered_fraction() {
+        // A square and an L (concave), under a light smaller and one larger
+        // than they are; ground points in the umbra, the penumbra, outside.
+        let l = DVec3::new(0.2, 5.0, 0.1);
+        let square = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+        let ell = [(-1.0, -1.0), (1.0, -1.0), (1.0, -0.2), (-0.2, -0.2), (-0.2, 1.0), (-1.0, 1.0)];
+        let mut checked = 0;
+        for points in [&square[..], &ell[..]] {
+            let edges = polygon(points, 2.0, l);
+            for r in [0.6, 2.5] {
+                let w = penumbra_wedges(&edges, l, r, 0, false);
+                for x in [-2.0, -1.4, -0.9, -0.3, 0.0, 0.4, 1.1, 1.6, 2.4] {
+                    for z in [-1.8, -0.6, 0.1, 0.9, 1.7] {
+                        let p = DVec3::new(x, 0.0, z);
+                        // The hard shadow: the light centre seen through the polygon.
+                        let t = (2.0 - p.y) / (l.y - p.y);
+                        let q = p + (l - p) * t;
+                        let hard = if inside(points, q.x, q.z) { 0.0 } else { 1.0 };
+                        let v = hard + w.wedges.iter().map(|x| coverage_term(x, p, l, r)).sum::<f64>();
+                        let truth = 1.0 - covered_fraction(points, 2.0, l, r, p);
+                        // The grid counts to about 1e-3 (400 x 400 over the disk).
+                        assert!((v - truth).abs() < 4e-3, "r {r} at {p}: {v} against {truth}");
+                        checked += usize::from(truth > 0.02 && truth < 0.98);
+                    }
+                }
+            }
+        }
+        assert!(checked > 40, "{checked} penumbra points");
+    }
+
+    #[test]
+    fn coverage_bounds_hold_every_point_the_edge_can_shadow() {
+        let l = DVec3::new(0.3, 5.0, -0.2);
+        let edges = polygon(&[(-1.0, -1.0), (1.0, -1.2), (1.3, 0.9), (-0.8, 1.1)], 2.0, l);
+        // Plus an edge pointing away from the light and one pointing back at it.
+        let mut all = edges.clone();
+        all.push(edge(DVec3::new(2.0, 2.0, 0.0), DVec3::new(2.2, 1.0, 0.1), 10, 11));
+        all.push(edge(DVec3::new(-2.0, 1.0, 0.0), DVec3::new(-2.1, 2.5, 0.2), 12, 13));
+        for r in [0.2, 1.0, 2.0] {
+            let w = penumbra_wedges(&all, l, r, 0, false);
+            let mut state = 12345u64;
+            let mut uniform = || {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            };
+            for x in &w.wedges {
+                let bounds = coverage_bounds(x, l, r);
+                let v = |c: [f32; 4]| DVec3::new(f64::from(c[0]), f64::from(c[1]), f64::from(c[2]));
+                let (a, b) = (v(x.a), v(x.b));
+                for _ in 0..2000 {
+                    // q on the edge, s on the sphere, p beyond q seen from s.
+                    let q = a + (b - a) * uniform();
+                    let d = DVec3::new(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalize_or_zero();
+                    let s = l + d * (r * uniform().cbrt());
+                    let p = q + (q - s) * (4.0 * uniform());
+                    for (n, dd) in &bounds {
+                        assert!(n.dot(p) <= dd + 1e-9 * (1.0 + dd.abs()), "{p} outside {n} {dd}");
+                    }
+                }
+                // And where the term is not zero, the point is inside.
+                for _ in 0..500 {
+                    let p = DVec3::new(uniform() * 8.0 - 4.0, uniform() * 2.0 - 0.5, uniform() * 8.0 - 4.0);
+                    if coverage_term(x, p, l, r) != 0.0 {
+                        assert!(bounds.iter().all(|(n, dd)| n.dot(p) <= dd + 1e-9), "{p}");
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn bins_cover_the_wedges_footprint_and_cull_what_leaves_the_box() {
         let l = DVec3::new(0.0, 6.0, 0.0);
@@ -650,7 +892,7 @@ mod tests {
         let camera = crate::scene::Camera { eye: [0.0, 8.0, 0.01], target: [0.0; 3], up: [0.0, 1.0, 0.0], fov_y_degrees: 60.0, width: 64, height: 64 };
         let (p, _, _) = camera.projection(glam::Vec3::new(-5.0, -0.1, -5.0), glam::Vec3::new(5.0, 2.5, 5.0));
         let view_proj = DMat4::from_cols_array(&(p * camera.view()).to_cols_array().map(f64::from));
-        let bins = bin_wedges(&w.wedges, view_proj, (64, 64), DVec3::new(-5.0, -0.1, -5.0), DVec3::new(5.0, 2.5, 5.0));
+        let bins = bin_wedges(&w.wedges, view_proj, (64, 64), DVec3::new(-5.0, -0.1, -5.0), DVec3::new(5.0, 2.5, 5.0), None);
         assert_eq!((bins.tiles_x, bins.tiles_y, bins.culled), (4, 4, 0));
         assert_eq!(bins.offsets.len(), 17);
         assert_eq!(*bins.offsets.last().unwrap() as usize, bins.indices.len());
@@ -664,10 +906,10 @@ mod tests {
         let inside = crate::scene::Camera { eye: [0.0, 1.0, 4.0], target: [0.0; 3], up: [0.0, 1.0, 0.0], fov_y_degrees: 60.0, width: 64, height: 64 };
         let (p, _, _) = inside.projection(glam::Vec3::new(-5.0, -0.1, -5.0), glam::Vec3::new(5.0, 2.5, 5.0));
         let near_view = DMat4::from_cols_array(&(p * inside.view()).to_cols_array().map(f64::from));
-        let close = bin_wedges(&w.wedges, near_view, (64, 64), DVec3::new(-5.0, -0.1, -5.0), DVec3::new(5.0, 2.5, 5.0));
+        let close = bin_wedges(&w.wedges, near_view, (64, 64), DVec3::new(-5.0, -0.1, -5.0), DVec3::new(5.0, 2.5, 5.0), None);
         assert!(close.indices.len() < 4 * 16 && !close.indices.is_empty(), "{}", close.indices.len());
         // A box that ends above the wedges culls them all.
-        let culled = bin_wedges(&w.wedges, view_proj, (64, 64), DVec3::new(-5.0, 3.0, -5.0), DVec3::new(5.0, 4.0, 5.0));
+        let culled = bin_wedges(&w.wedges, view_proj, (64, 64), DVec3::new(-5.0, 3.0, -5.0), DVec3::new(5.0, 4.0, 5.0), None);
         assert_eq!(culled.culled, 4);
     }
 }

@@ -1,4 +1,12 @@
-//! Method `wedges`: penumbra wedges (Akenine-Möller & Assarsson 2002).
+//! Method `wedges`: penumbra wedges (Akenine-Möller & Assarsson 2002), by
+//! default with the per-pixel coverage of their 2003 successor (Assarsson &
+//! Akenine-Möller, "A geometry-based soft shadow volume algorithm using
+//! graphics hardware"): the wedge only bounds where an edge matters, and
+//! inside it the edge, projected from the pixel onto the light, gives the
+//! covered part of the light's disk exactly (`intensity`; the 2002
+//! interpolation of 4.2 is `intensity="interpolation"`). Where silhouettes
+//! overlap as the light sees them, `overlap="gate"` drops the terms of an
+//! edge with another surface right behind it (docs/methods/wedges.md).
 //!
 //! Pass 1 is the shadow map of `hard`, the hard shadow from the light
 //! centre. Pass 2 builds, on the CPU, a penumbra wedge per silhouette edge
@@ -40,11 +48,11 @@ use crate::passes::shadow_test::ShadowMapSettings;
 use crate::silhouettes::{OpenEdges, Repairs};
 
 pub mod geometry;
-pub use geometry::{bin_wedges, penumbra_wedges, wedge_intensity, Bins, WedgeGpu, WedgeStats, Wedges, TILE};
+pub use geometry::{bin_wedges, coverage_bounds, coverage_term, penumbra_wedges, wedge_intensity, Bins, WedgeGpu, WedgeStats, Wedges, TILE};
 
 /// The values of `repairs`, cumulative in the order docs/methods/wedges.md
 /// measures them; "all" adds the horizon to the last.
-pub const REPAIR_LEVELS: [&str; 4] = ["all", "none", "hidden", "cone+hidden"];
+pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "hidden", "cone+hidden", "cone+horizon"];
 
 /// The wedges and their screen bins (pass 2), as the pass cache keeps them.
 pub const PENUMBRA_WEDGES: CachedPass = CachedPass { name: "penumbra_wedges", capacity: 1 };
@@ -60,6 +68,29 @@ pub struct WedgesParams {
     pub repairs: Repairs,
     /// Where the hard shadow map is read for a pixel inside wedges (`HardTerm`).
     pub hard_term: HardTerm,
+    /// How a wedge's light intensity is computed (`Intensity`).
+    pub intensity: Intensity,
+    /// Whether a wedge adds nothing where the map just outside its edge's
+    /// hard shadow is shadowed by something else (`"gate"`), or its term all
+    /// the same (`"sum"`, both papers').
+    pub overlap_gate: bool,
+}
+
+/// How the light intensity s inside a wedge is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Intensity {
+    /// The 2002 paper's interpolation between the front and back planes
+    /// along the side rays, then between the side planes (4.2, Eq. 1-3).
+    Interpolation,
+    /// The edge projected from the pixel onto the light, and the part of the
+    /// light's disk it uncovers (or covers) measured exactly (Assarsson &
+    /// Akenine-Möller 2003's per-pixel coverage). The wedges then only bound
+    /// where an edge matters (`geometry::coverage_bounds`).
+    Coverage,
+}
+
+impl Intensity {
+    pub const NAMES: [&'static str; 2] = ["interpolation", "coverage"];
 }
 
 /// Where the shadow map is read for a pixel inside wedges.
@@ -102,7 +133,7 @@ pub struct PenumbraWedges {
 
 impl Method for PenumbraWedges {
     const NAME: &'static str = "wedges";
-    const PAPER: &'static str = "penumbra wedges (Akenine-Möller & Assarsson 2002, 4.1-4.2)";
+    const PAPER: &'static str = "penumbra wedges (Akenine-Möller & Assarsson 2002, 4.1-4.2; per-pixel coverage of Assarsson & Akenine-Möller 2003)";
     type Params = WedgesParams;
 
     fn specs() -> Vec<ParamSpec> {
@@ -121,6 +152,18 @@ impl Method for PenumbraWedges {
                 &HardTerm::NAMES,
                 "where the hard shadow map is read inside wedges: at the pixel (each wedge adds s - h), or on the lit side of every holding wedge's quad (each adds s - 1: overlapping casters summed as the paper's count)",
             ),
+            ParamSpec::choice(
+                "intensity",
+                "coverage",
+                &Intensity::NAMES,
+                "light intensity inside a wedge: the 2002 paper's interpolation between its planes (4.2, Eq. 1-3), or the fraction of the light's disk the edge projected from the pixel covers, computed exactly (Assarsson & Akenine-Möller 2003; falloff and acute_wedges then do nothing)",
+            ),
+            ParamSpec::choice(
+                "overlap",
+                "gate",
+                &["sum", "gate"],
+                "silhouettes that overlap as the light sees them (folds, several casters): every wedge's term summed, as both papers, or a wedge's term dropped where the map, read at the pixel moved just outside the hard shadow its edge casts, is in shadow too (another surface right behind the edge covers what it would uncover or hide)",
+            ),
             ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
             ParamSpec::choice(
                 "open_edges",
@@ -132,7 +175,7 @@ impl Method for PenumbraWedges {
                 "repairs",
                 "all",
                 &REPAIR_LEVELS,
-                "departures from the paper for real meshes, cumulative: none, hidden (no wedge for silhouette edges hidden from the light centre), cone+hidden (shared side lines kept in their vertex's light cone), all (+ the light below the receiver's horizon hidden)",
+                "departures from the paper for real meshes, cumulative: none, hidden (no wedge for silhouette edges hidden from the light centre), cone+hidden (shared side lines kept in their vertex's light cone), all (+ the light below the receiver's horizon hidden); cone+horizon is all but hidden",
             ),
         ]);
         specs
@@ -151,6 +194,8 @@ impl Method for PenumbraWedges {
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs,
             hard_term: if p.choice("hard_term") == "lit_side" { HardTerm::LitSide } else { HardTerm::AtPoint },
+            intensity: if p.choice("intensity") == "coverage" { Intensity::Coverage } else { Intensity::Interpolation },
+            overlap_gate: p.choice("overlap") == "gate",
         })
     }
 
@@ -190,7 +235,7 @@ impl Method for PenumbraWedges {
             .f64s(&[light.radius])
             .u32(params.acute_wedges)
             .bytes(params.open_edges.name().as_bytes())
-            .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden)]);
+            .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden), u8::from(params.intensity == Intensity::Coverage)]);
         let mut fresh = false;
         let wedges = frame.cached(PENUMBRA_WEDGES.name, key.finish(), |frame| {
             fresh = true;
@@ -201,7 +246,12 @@ impl Method for PenumbraWedges {
         let intensity = frame.ctx.screen_texture("wedges::intensity");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
             let counter = ctx.counters("wedges::pixels_in_wedge", 1, encoder);
-            let flags = u32::from(params.falloff) | (u32::from(params.repairs.horizon) << 1) | (u32::from(params.hard_term == HardTerm::LitSide) << 2);
+            let coverage = params.intensity == Intensity::Coverage;
+            let flags = u32::from(params.falloff && !coverage)
+                | (u32::from(params.repairs.horizon) << 1)
+                | (u32::from(params.hard_term == HardTerm::LitSide) << 2)
+                | (u32::from(coverage) << 3)
+                | (u32::from(params.overlap_gate) << 4);
             let test = ctx.parameters("wedges::shadow_test", &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0));
             let settings = ctx.parameters("wedges::settings", &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count] });
             let resources = [
@@ -251,7 +301,9 @@ impl PenumbraWedges {
             if r > 0.0 {
                 let silhouette = ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
                 cache_hits = silhouette.cache_hits;
-                built = penumbra_wedges(&silhouette.edges, l, r, params.acute_wedges, params.repairs.cone);
+                // Coverage measures a corner exactly: extra wedges there would add nothing.
+                let acute = if params.intensity == Intensity::Coverage { 0 } else { params.acute_wedges };
+                built = penumbra_wedges(&silhouette.edges, l, r, acute, params.repairs.cone);
                 built.stats.hidden_edges = silhouette.hidden_edges;
                 built.stats.connectivity = silhouette.connectivity;
                 built.stats.silhouette_edges += silhouette.hidden_edges;
@@ -259,7 +311,8 @@ impl PenumbraWedges {
             let camera = ctx.camera;
             let (projection, _, _) = camera.projection(ctx.prepared.bounds_min, ctx.prepared.bounds_max);
             let view_proj = DMat4::from_cols_array(&(projection * camera.view()).to_cols_array().map(f64::from));
-            let bins = bin_wedges(&built.wedges, view_proj, ctx.size, ctx.prepared.bounds_min.as_dvec3(), ctx.prepared.bounds_max.as_dvec3());
+            let coverage = (params.intensity == Intensity::Coverage).then_some((l, r));
+            let bins = bin_wedges(&built.wedges, view_proj, ctx.size, ctx.prepared.bounds_min.as_dvec3(), ctx.prepared.bounds_max.as_dvec3(), coverage);
             built.stats.culled_wedges = bins.culled;
             built.stats.binned = bins.indices.len();
             // A storage binding may not be empty: one zeroed entry stands for none.

@@ -27,7 +27,8 @@ struct Wedge {
 
 struct WedgeSettings {
     // x: tile size in pixels; y: tiles per row; z: flags (bit 0: falloff,
-    // bit 1: repair "horizon", bit 2: hard_term "lit_side"); w: wedge count.
+    // bit 1: repair "horizon", bit 2: hard_term "lit_side", bit 3: intensity
+    // "coverage", bit 4: overlap "gate"); w: wedge count.
     tiles: vec4<u32>,
 };
 
@@ -94,6 +95,101 @@ fn wedge_term(w: Wedge, p: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(s - h, 1.0);
 }
 
+// The signed area of the part of the unit disk inside the triangle (0, p, q).
+fn disk_triangle(p: vec2<f32>, q: vec2<f32>) -> f32 {
+    let e = q - p;
+    let qa = dot(e, e);
+    let qb = 2.0 * dot(p, e);
+    let qc = dot(p, p) - 1.0;
+    let disc = qb * qb - 4.0 * qa * qc;
+    let whole = sector_area(p, q);
+    // qa > 0 here (the caller drops degenerate projections), so the roots are finite.
+    if (qa <= 0.0 || disc <= 0.0) {
+        return whole;
+    }
+    let root = sqrt(disc);
+    let t0 = max((-qb - root) / (2.0 * qa), 0.0);
+    let t1 = min((-qb + root) / (2.0 * qa), 1.0);
+    if (t0 >= t1) {
+        return whole;
+    }
+    let x0 = p + e * t0;
+    let x1 = p + e * t1;
+    return sector_area(p, x0) + 0.5 * cross2(x0, x1) + sector_area(x1, q);
+}
+
+fn cross2(x: vec2<f32>, y: vec2<f32>) -> f32 {
+    return x.x * y.y - x.y * y.x;
+}
+
+// The signed area of the unit disk's sector from direction x to direction y
+// (atan2 is defined for the zero vector too: the sector is then empty).
+fn sector_area(x: vec2<f32>, y: vec2<f32>) -> f32 {
+    return 0.5 * atan2(cross2(x, y), dot(x, y));
+}
+
+// Per-pixel coverage (Assarsson & Akenine-Möller 2003, the visibility of a
+// point from the silhouette edges projected onto the light; geometry.rs's
+// `coverage_term` is the f64 twin): wedge w's edge, clipped to the part in
+// front of p, is projected from p onto the plane through the light's centre
+// c facing p, where the light is a disk (the tangent cone's radius there).
+// The part of the disk inside the projected edge's angular sector about c
+// and beyond the edge is the fraction this edge changes from the hard
+// shadow's value: light seen past it when p is behind the quad (h = 0),
+// hidden by it when in front (h = 1). Returns s - h and whether the
+// projected edge meets the disk (y = 1). Summed over a closed loop with the
+// hard shadow, the terms give the disk's covered fraction exactly (the fan
+// of the projected polygon about c); there is no interpolation.
+fn coverage_term(w: Wedge, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
+    let axis = c - p;
+    let dist = length(axis);
+    // p inside (or on) the light: nothing to project.
+    if (dist <= r * 1.0001) {
+        return vec2<f32>(0.0, 0.0);
+    }
+    let z = axis / dist;
+    let eps = 1e-4 * dist;
+    var a = w.a.xyz;
+    var b = w.b.xyz;
+    let da = dot(a - p, z);
+    let db = dot(b - p, z);
+    if (da < eps && db < eps) {
+        return vec2<f32>(0.0, 0.0);
+    }
+    // Clip to depth >= eps in front of p (db - da != 0 when exactly one end is behind).
+    if (da < eps) {
+        a = a + (b - a) * ((eps - da) / (db - da));
+    }
+    if (db < eps) {
+        b = b + (a - b) * ((eps - db) / (da - db));
+    }
+    // dist > r * 1.0001: the root is positive.
+    let radius = r * dist / sqrt(dist * dist - r * r);
+    let e1 = normalize(select(vec3<f32>(0.0, -z.z, z.y), vec3<f32>(-z.y, z.x, 0.0), abs(z.z) < 0.9));
+    let e2 = cross(z, e1);
+    // Depths >= eps > 0 after the clip.
+    let qa = (a - p) * (dist / dot(a - p, z)) - axis;
+    let qb = (b - p) * (dist / dot(b - p, z)) - axis;
+    let pa = vec2<f32>(dot(qa, e1), dot(qa, e2)) / radius;
+    let pb = vec2<f32>(dot(qb, e1), dot(qb, e2)) / radius;
+    let e = pb - pa;
+    if (dot(e, e) <= 1e-12) {
+        return vec2<f32>(0.0, 0.0);
+    }
+    // Whether the projected edge meets the disk: its distance to the centre below 1.
+    let t = clamp(-dot(pa, e) / dot(e, e), 0.0, 1.0);
+    let closest = pa + e * t;
+    if (dot(closest, closest) >= 1.0) {
+        return vec2<f32>(0.0, 0.0);
+    }
+    let beyond = abs(sector_area(pa, pb) - disk_triangle(pa, pb)) / 3.14159265;
+    let lit = dot(w.hard.xyz, p - w.a.xyz) > 0.0;
+    let s = select(beyond, 1.0 - beyond, lit);
+    // With hard_term "lit_side" every holding wedge adds s - 1.
+    let h = select(0.0, 1.0, lit || (settings.tiles.z & 4u) != 0u);
+    return vec2<f32>(s - h, 1.0);
+}
+
 // Texels (besides the normal offset) a pixel near a wedge's quad plane is
 // moved off it for the shadow-map read (see main).
 const CONSISTENCY_TEXELS: f32 = 2.0;
@@ -137,7 +233,34 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             var inside = false;
             for (var i = start; i < end; i = i + 1u) {
                 let w = wedges[tile_wedges[i]];
-                let term = wedge_term(w, p);
+                var term: vec2<f32>;
+                if ((settings.tiles.z & 8u) != 0u) {
+                    term = coverage_term(w, p, wedge_test.center.xyz, r);
+                } else {
+                    term = wedge_term(w, p);
+                }
+                if (term.y > 0.0 && (settings.tiles.z & 16u) != 0u) {
+                    // overlap "gate": the map read at p moved, in its
+                    // tangent plane, to just off the lit side of this
+                    // wedge's quad (margin off its plane: just outside the
+                    // hard shadow this edge casts). If that point is in
+                    // shadow, another surface lies right behind the edge as
+                    // the light sees it (an inner fold, a second caster),
+                    // and it covers what this edge would uncover (p behind
+                    // the quad) or already covers what it would hide (p in
+                    // front): the wedge adds nothing. A quad nearly
+                    // parallel to the receiver keeps its term.
+                    let d_gate = dot(w.hard.xyz, p - w.a.xyz);
+                    let along_gate = w.hard.xyz - n * dot(w.hard.xyz, n);
+                    let rate_gate = dot(along_gate, w.hard.xyz);
+                    if (rate_gate > 0.05) {
+                        let probe = p + along_gate * ((margin - d_gate) / rate_gate);
+                        let qg = biased_receiver(wedge_test, probe, n, cos_theta);
+                        if (qg.w > map_depth(wedge_test, shadow_map, qg.xyz)) {
+                            term = vec2<f32>(0.0, 0.0);
+                        }
+                    }
+                }
                 if (term.y > 0.0) {
                     terms = terms + term.x;
                     inside = true;
