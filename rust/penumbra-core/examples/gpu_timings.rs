@@ -641,6 +641,42 @@ pub fn describe(r: &Row) -> String {
     }
 }
 
+/// Tables of the warm wall time and the passes' sum, methods by scenes, in
+/// ms (`unsup`, `error`, `-` for rows without times; scene names without
+/// their extension, cut to 15 characters): the end of a run's output, short
+/// enough for the tail of a log.
+pub fn summary(rows: &[Row]) -> String {
+    let mut scenes: Vec<&str> = Vec::new();
+    let mut methods: Vec<&str> = Vec::new();
+    for r in rows {
+        if !scenes.contains(&r.scene.as_str()) {
+            scenes.push(&r.scene);
+        }
+        if !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
+        }
+    }
+    let short = |s: &str| s.split('.').next().unwrap_or(s).chars().take(15).collect::<String>();
+    let mut out = String::new();
+    for (title, value) in [("wall ms, median", Row::wall_median_ms as fn(&Row) -> f64), ("passes ms, without readback", Row::pass_sum_ms)] {
+        out += &format!("{title}\n{:<15}{}\n", "method", scenes.iter().map(|s| format!(" {:>15}", short(s))).collect::<String>());
+        for m in &methods {
+            out += &format!("{m:<15}");
+            for s in &scenes {
+                let cell = match rows.iter().find(|r| r.method == *m && r.scene == *s) {
+                    Some(r) if r.status == Status::Ok => format!("{:.1}", value(r)),
+                    Some(r) if matches!(r.status, Status::Unsupported(_)) => "unsup".into(),
+                    Some(r) if matches!(r.status, Status::Error(_)) => "error".into(),
+                    _ => "-".into(),
+                };
+                out += &format!(" {cell:>15}");
+            }
+            out += "\n";
+        }
+    }
+    out
+}
+
 /// The adapter, as the first line of a run prints it.
 pub fn adapter_line(a: &AdapterSummary) -> String {
     format!(
@@ -748,6 +784,7 @@ pub fn run(o: &Options, log: &mut dyn Write) -> Result<Report, String> {
             report.write_files()?;
         }
     }
+    let _ = write!(log, "{}", summary(&report.rows));
     Ok(report)
 }
 

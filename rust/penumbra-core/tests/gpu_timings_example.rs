@@ -132,6 +132,10 @@ fn a_small_run_times_every_registered_method() {
     let log = String::from_utf8(log).unwrap();
     eprintln!("{log}");
     assert!(log.starts_with("adapter: "), "{log}");
+    // The closing tables: a title, a header and a line per method, twice.
+    let tail: Vec<&str> = log.lines().rev().take(2 * (2 + REGISTRY.len())).collect();
+    assert!(tail.iter().any(|l| l.starts_with("wall ms")) && tail.iter().any(|l| l.starts_with("method ") && l.contains("resting_box")), "{log}");
+    assert!(tail.iter().filter(|l| l.starts_with("triangle_masks ")).count() == 2, "{log}");
     assert_eq!(report.rows.len(), REGISTRY.len());
     for (row, r) in report.rows.iter().zip(REGISTRY) {
         assert_eq!(row.method, r.name);
