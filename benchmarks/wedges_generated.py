@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import statistics
+from typing import Any
 
 import numpy as np
 
@@ -23,7 +24,7 @@ from penumbra import metrics, scenes
 from penumbra.mitsuba import ground_truth
 
 # (label, method, parameters)
-VARIANTS: list[tuple[str, str, dict[str, object]]] = [
+VARIANTS: list[tuple[str, str, dict[str, Any]]] = [
     ("hard", "hard", {}),
     ("pcss", "pcss", {}),
     ("wedges, 2002 interpolation (old default)", "wedges", {"intensity": "interpolation", "overlap": "sum"}),
@@ -66,11 +67,11 @@ def main() -> None:
     print("| variant | median penumbra RMSE | worst | at most 0.5x hard's | worse than hard | worst stray % | scenes over 0.5% stray |")
     print("|---|---|---|---|---|---|---|")
     for label, _, _ in VARIANTS:
-        e = np.array(rmse[label])
-        s = np.array(stray[label])
+        errors = np.array(rmse[label])
+        strays = np.array(stray[label])
         print(
-            f"| {label} | {statistics.median(e):.3f} | {e.max():.3f} | {(e <= 0.5 * hard).sum()} of {len(e)} | "
-            f"{(e > hard).sum()} | {s.max():.2f} | {(s > 0.5).sum()} |"
+            f"| {label} | {statistics.median(errors):.3f} | {errors.max():.3f} | {(errors <= 0.5 * hard).sum()} of {len(errors)} | "
+            f"{(errors > hard).sum()} | {strays.max():.2f} | {(strays > 0.5).sum()} |"
         )
     if args.per_scene:
         print()
