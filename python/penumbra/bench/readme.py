@@ -95,10 +95,14 @@ def block(rows: list[dict[str, Any]]) -> str:
             f"`{best_label}`", f"{_median([_f(r, ERROR) for r in best]):.3f}", _ratio(best),
         ]
         if large:
-            here = [g for (m, _), g in big.items() if m == method]
-            cells.append(_ratio(here[0]) if here else "-")
+            here = [(lab, g) for (m, lab), g in big.items() if m == method]
+            here.sort(key=lambda x: x[0] != "default")
+            cells.append((_ratio(here[0][1]) + ("" if here[0][0] == "default" else f" (`{here[0][0]}`)")) if here else "-")
         lines.append("| " + " | ".join(cells) + " |")
-    lines += ["", _advice(groups, main), END]
+    lines += ["", _advice(groups, main)]
+    if large:
+        lines += ["", _advice(big, large)]
+    lines.append(END)
     return "\n".join(lines)
 
 
@@ -117,7 +121,7 @@ def _advice(groups: dict[tuple[str, str], list[dict[str, Any]]], size: str) -> s
                 setting = "" if lab == "default" else f" `{lab}`"
                 parts.append(f"on {what} `{m}`{setting} ({_median([_f(r, 'time_over_hard') for r in g]):.2f} times `hard`, {_ratio(g)} times Mitsuba at equal error)")
             else:
-                parts.append(f"on {what} no method tried")
+                parts.append(f"on {what} no setting of this run")
         out.append(f"for a penumbra RMSE of at most {budget:g}, " + "; ".join(parts) + ".")
     return " ".join(out[:1]) + " " + " ".join(s[0].upper() + s[1:] for s in out[1:])
 
