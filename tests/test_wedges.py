@@ -282,7 +282,7 @@ def test_wedges_hold_their_measured_accuracy_on_real_meshes(renderer: penumbra.R
 
 
 # Issue 28, seeds 0-11 of the generated scenes at 96x96 (Mitsuba at 256
-# samples), measured with benchmarks/wedges_generated.py --count 12: the
+# samples), measured over seeds 0-11 (the rows of `penumbra bench --config benchmarks/generated.toml`): the
 # defaults' penumbra RMSE is 0.27-0.94 of hard's on every scene (0.94: seed
 # 1, a boot as wide as a third of its distance to the light; 0.35: seed 11,
 # the boot between the light and spot that the 2002 interpolation got
