@@ -39,12 +39,13 @@ from typing import Any
 import numpy as np
 
 import penumbra
+from penumbra.comparison import RECOMMENDED
 from penumbra import metrics
 from penumbra import mitsuba as pm
 
 MESHES = Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes"
 OPEN_MESHES = ("bun_zipper.ply", "bun_zipper_res4.ply", "CornellBox-Original.obj")
-PVMF_RECOMMENDED: dict[str, Any] = {"kernel": "disk", "n_blur": 0, "offsets": "radius", "umbra": "skip", "s_e": 0.02}
+PVMF_RECOMMENDED: dict[str, Any] = RECOMMENDED["pvmf"]
 
 BP_CONFIGS: list[tuple[str, dict[str, Any]]] = [
     ("defaults", {}),

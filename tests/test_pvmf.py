@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 import penumbra
+from penumbra.comparison import RECOMMENDED
 from penumbra.scenes import box, ground_plane, ground_slab
 
 # The pvmf settings docs/real_meshes.md recommends (benchmarks/real_meshes.py).
-PVMF_RECOMMENDED = {"kernel": "disk", "n_blur": 0, "offsets": "radius", "umbra": "skip", "s_e": 0.02}
+PVMF_RECOMMENDED = RECOMMENDED["pvmf"]
 
 RADII = [0.0, 1e-4, 0.05, 0.5, 2.2]
 
