@@ -166,7 +166,7 @@ def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = N
     (:func:`from_mesh`, ``setup="close"``), ``"wide_floor:<file>"``
     (:func:`wide_floor`), ``"cornell_box"`` and ``"sponza"``."""
     if not isinstance(name, str):
-        raise ParameterError(f"a scene name must be a string, got {name!r}")
+        raise ParameterError(f"unknown scene {name!r}: a scene name is a string; built-in scenes: {names()}")
     if name in _SCENES:
         scene = _SCENES[name]()
     else:
@@ -220,7 +220,7 @@ def expand_names(entries: list[str]) -> list[str]:
             out += [f"{GENERATED_PREFIX}{k}" for k in range(int(first), int(last) + 1)]
             continue
         if not isinstance(entry, str):
-            raise ParameterError(f"a scene name must be a string, got {entry!r}")
+            raise ParameterError(f"unknown scene {entry!r}: a scene name is a string")
         if entry not in _SCENES:
             _parse(entry)
         out.append(entry)
