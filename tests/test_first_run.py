@@ -160,9 +160,15 @@ def test_first_command_compares_every_method(needs_mitsuba_and_gpu: None, tmp_pa
     for name in names:
         assert f"| {name} | " in done.stdout
     assert "*ground-truth noise*" in done.stdout and "median of 1 after a warm-up render" in done.stdout
-    # reference is the yardstick: nearest the ground truth.
+    # reference is the yardstick: nearer the ground truth than every method
+    # that approximates the light, and level with the other two exact ones
+    # (raytraced, triangle_masks) to within the truth's own noise (their
+    # order among themselves is that noise's: 2e-5 apart here).
     errors = {m["method"]: m["metrics"]["visibility_rmse_penumbra"] for m in figures["methods"]}
-    assert errors["reference"] == min(errors.values())
+    noise = figures["methods"][0]["metrics"]["noise_visibility_rmse_penumbra"]
+    exact = ("reference", "raytraced", "triangle_masks")
+    assert errors["reference"] < min(e for name, e in errors.items() if name not in exact), errors
+    assert all(abs(errors[name] - errors["reference"]) <= noise for name in exact), (errors, noise)
 
 
 def test_compare_picks_methods_and_times_against_hard(needs_mitsuba_and_gpu: None, tmp_path: Path) -> None:

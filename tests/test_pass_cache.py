@@ -56,7 +56,7 @@ def test_switch_and_defaults(cached: penumbra.Renderer, uncached: penumbra.Rende
     for _ in range(2):
         r = uncached.render(s, "pvmf", map_size=MAP)
         assert r.stats["pass_cache"] == 0 and r.stats["reused_passes"] == 0 and r.reused_passes == []
-        assert list(r.timings) == ["gbuffer", "shadow_map", "mask", "estimation", "blur", "shading", "readback"]
+        assert list(r.timings) == ["gbuffer", "shadow_map", "mask", "object_map", "estimation", "blur", "shading", "readback"]
     assert set(uncached.pass_cache_entries().values()) == {0}
 
 
@@ -78,11 +78,11 @@ def test_late_parameter_reuses_earlier_passes(cached: penumbra.Renderer) -> None
     # pvm falloff: only the visibility pass and shading run.
     cached.render(s, "pvm", map_size=MAP, falloff=True)
     pvm = cached.render(s, "pvm", map_size=MAP, falloff=False)
-    assert pvm.reused_passes == ["gbuffer", "penumbra_volumes", "shadow_map"]
+    assert pvm.reused_passes == ["gbuffer", "object_map", "penumbra_volumes", "shadow_map"]
     assert list(pvm.timings) == ["visibility", "shading", "readback"]
-    # A light radius change keeps the G-buffer and the centre shadow map only.
+    # A light radius change keeps the G-buffer, the centre shadow map and the object map only.
     wider = cached.render(scene(light_radius=0.8), "pvm", map_size=MAP, falloff=False)
-    assert wider.reused_passes == ["gbuffer", "shadow_map"]
+    assert wider.reused_passes == ["gbuffer", "object_map", "shadow_map"]
     entries = cached.pass_cache_entries()
     assert entries["penumbra_volumes"] == 1 and entries["gbuffer"] >= 1
     cached.clear_pass_cache()
@@ -122,14 +122,15 @@ def test_changes_invalidate(cached: penumbra.Renderer, uncached: penumbra.Render
     assert base.camera is not None
     variants: list[tuple[str, penumbra.Scene, dict[str, Any], list[str]]] = [
         ("geometry", moved_mesh, {}, []),
-        ("camera", base.with_camera(penumbra.Camera.look_at(np.add(base.camera.eye, 0.1), base.camera.target, width=SIZE, height=SIZE)), {}, ["mask", "shadow_map"]),
+        ("camera", base.with_camera(penumbra.Camera.look_at(np.add(base.camera.eye, 0.1), base.camera.target, width=SIZE, height=SIZE)), {}, ["mask", "object_map", "shadow_map"]),
         ("light centre", base.with_light(penumbra.SphereLight(np.add(light.center, 0.05), light.radius, intensity=light.intensity)), {}, ["gbuffer"]),
-        ("light radius", base.with_light(light.with_radius(light.radius * 0.5)), {}, ["gbuffer", "shadow_map"]),
+        ("light radius", base.with_light(light.with_radius(light.radius * 0.5)), {}, ["gbuffer", "object_map", "shadow_map"]),
         ("map size", base, {"map_size": MAP // 2}, ["gbuffer"]),
-        ("bias", base, {"bias": "midpoint"}, ["gbuffer", "mask"]),
-        ("s_e", base, {"s_e": 0.25}, ["gbuffer", "shadow_map"]),
-        ("s_p", base, {"s_p": 1.0}, ["gbuffer", "mask", "shadow_map"]),
-        ("seed", base, {"seed": 3}, ["gbuffer", "mask", "shadow_map"]),
+        # The object map is the first surface's, whatever the bias keeps.
+        ("bias", base, {"bias": "midpoint"}, ["gbuffer", "mask", "object_map"]),
+        ("s_e", base, {"s_e": 0.25}, ["gbuffer", "object_map", "shadow_map"]),
+        ("s_p", base, {"s_p": 1.0}, ["gbuffer", "mask", "object_map", "shadow_map"]),
+        ("seed", base, {"seed": 3}, ["gbuffer", "mask", "object_map", "shadow_map"]),
     ]
     for what, s, params, expect in variants:
         p = {"map_size": MAP, **params}
@@ -147,7 +148,7 @@ def _alternative(method: str, name: str, value: Any) -> Any:
         return next(c for c in choices if c != value)
     if isinstance(value, int):
         return value // 2 if value > 1 else value + 1
-    return value * 0.5 if value > 0 else 0.5
+    return value * 2.0 if value > 0 else 0.5
 
 
 # reference, raytraced and triangle_masks cache nothing of their own (the G-buffer's key is tested with the others).

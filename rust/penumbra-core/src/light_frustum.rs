@@ -232,7 +232,18 @@ impl LightFrustum {
                  such scenes with cube-map faces"
             )));
         }
-        let mut fitted = Self::fit_along(center, axis, points.clone())?;
+        // Start from the direction to the centre of the points' bounding box
+        // where a frustum along it covers them: min and max are exact and
+        // independent of order and multiplicity, so a doubled, split or
+        // reordered surface gets the very same frustum and texel grid
+        // (issue 27). The mean direction weights each corner once per face:
+        // it is only the fallback (the box's centre may lie behind the light).
+        let (lo, hi) = points.clone().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let to_box = (0.5 * lo + 0.5 * hi - center).normalize_or_zero();
+        let mut fitted = match (to_box != Vec3::ZERO).then(|| Self::fit_along(center, to_box, points.clone())) {
+            Some(Ok(f)) => f,
+            _ => Self::fit_along(center, axis, points.clone())?,
+        };
         let w = fitted.window;
         let mid = Vec3::new(0.5 * (w.x + w.y), 0.5 * (w.z + w.w), -1.0);
         let recentred = fitted.view.inverse().transform_vector3(mid).normalize_or_zero();
@@ -438,6 +449,20 @@ mod tests {
             assert!(ndc.x.abs() <= 1.0 && ndc.y.abs() <= 1.0, "{p} -> {ndc}");
             assert!((0.0..=1.0).contains(&ndc.z), "{p} -> depth {}", ndc.z);
         }
+    }
+
+    #[test]
+    fn the_frustum_ignores_the_order_and_multiplicity_of_points() {
+        // A doubled surface, or its corners in another order, cast the same
+        // shadow: the map's frustum (and so its texel grid) must not move.
+        let mut points = plane_points();
+        points.extend([Vec3::new(0.3, 1.0, 0.2), Vec3::new(-0.2, 0.8, 0.1)]);
+        let light = Vec3::new(1.0, 4.0, 0.5);
+        let f = LightFrustum::fit(light, points.iter().copied()).unwrap();
+        let mut doubled = points.clone();
+        doubled.extend(points.iter().rev().copied());
+        doubled.extend(std::iter::repeat_n(points[5], 40));
+        assert_eq!(f, LightFrustum::fit(light, doubled.iter().copied()).unwrap());
     }
 
     #[test]
