@@ -63,7 +63,7 @@ def test_renders_with_its_passes_stats_and_intermediates(renderer: penumbra.Rend
         scene = penumbra.scenes.get(name, width=64, height=64)
         renderer.clear_pass_cache()
         result = renderer.render(scene, "backprojection", intermediates=True, map_size=256)
-        assert list(result.timings) == ["gbuffer", "shadow_map", "hierarchy", "classification", "visibility", "pull_push", "shading", "readback"]
+        assert list(result.timings) == ["gbuffer", "shadow_map", "hierarchy", "object_map", "classification", "visibility", "pull_push", "shading", "readback"]
         for key in ("backprojection_class", "backprojection_kernel", "backprojection_level", "backprojection_visibility_sparse", "backprojection_discontinuities"):
             assert key in result.images, key
             assert np.isfinite(result.images[key]).all(), key

@@ -40,7 +40,7 @@ def test_every_scene_renders_with_its_passes_stats_and_intermediates(renderer: p
         scene = penumbra.scenes.get(name, width=64, height=64)
         renderer.clear_pass_cache()  # every pass runs, and is timed
         result = renderer.render(scene, "pvmf", intermediates=True, map_size=512)
-        assert list(result.timings) == ["gbuffer", "shadow_map", "mask", "estimation", "blur", "shading", "readback"]
+        assert list(result.timings) == ["gbuffer", "shadow_map", "mask", "object_map", "estimation", "blur", "shading", "readback"]
         for key in ("pvmf_mask_depth", "pvmf_edge_distance", "pvmf_visibility_raw", "pvmf_blur_mask", "pvmf_filter_width", "shadow_map"):
             assert key in result.images, key
             assert np.isfinite(result.images[key]).all(), key

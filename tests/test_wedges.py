@@ -114,6 +114,7 @@ def test_intermediates_and_stats_explain_the_image(renderer: penumbra.Renderer) 
     assert (result["wedges_hard"][outside] == hard[outside]).mean() > 0.999
     # A pixel whose intensity is not its hard term is inside a wedge.
     assert result.stats["pixels_in_wedge"] >= int((intensity != result["wedges_hard"]).sum()) > 0
+    # repairs="cone+hidden": no horizon repair, so no object map.
     assert list(result.timings)[:4] == ["gbuffer", "shadow_map", "penumbra_wedges", "visibility"]
 
 
@@ -122,7 +123,7 @@ def test_pass_cache_reuses_the_wedges(renderer: penumbra.Renderer) -> None:
     renderer.clear_pass_cache()
     first = renderer.render(scene, "wedges", map_size=512)
     again = renderer.render(scene, "wedges", map_size=512)
-    assert again.reused_passes == ["gbuffer", "penumbra_wedges", "shadow_map"]
+    assert again.reused_passes == ["gbuffer", "object_map", "penumbra_wedges", "shadow_map"]
     np.testing.assert_array_equal(first.visibility, again.visibility)
     # Another acute_wedges value rebuilds the wedges from cached silhouettes.
     other = renderer.render(scene, "wedges", map_size=512, acute_wedges=4)

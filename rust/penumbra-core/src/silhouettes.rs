@@ -92,6 +92,8 @@ pub struct SilhouetteEdge {
     /// Welded vertex indices of a and b.
     pub ia: u32,
     pub ib: u32,
+    /// The connected surface the edge lies on (`Topology::components`).
+    pub component: u32,
 }
 
 /// Silhouette edges of one mesh with respect to the light centre `l` (4.1.1):
@@ -173,7 +175,7 @@ fn oriented(topology: &Topology, v: [u32; 2], faces: &[u32], l: DVec3, strict: b
         std::mem::swap(&mut a, &mut b);
         std::mem::swap(&mut ia, &mut ib);
     }
-    Some(SilhouetteEdge { a, b, ia, ib })
+    Some(SilhouetteEdge { a, b, ia, ib, component: topology.components[ia as usize] })
 }
 
 /// The silhouette edges that the light's centre sees, and how many are hidden.
@@ -297,6 +299,38 @@ impl SilhouetteCache {
             c.insert((key, light_key, boundary), edges.clone());
         }
         Ok(((*edges).clone(), 0, topology.stats))
+    }
+
+    /// Each mesh's object for the object map (`passes::object_map`): the
+    /// connected surface (`Topology::components`) that all its faces' corners
+    /// belong to, or `MANY` when they belong to several.
+    /// Faces connectivity ignores (degenerate, duplicate) do not count, so a
+    /// sliver's stray corner does not split its mesh; a surface split over
+    /// meshes is one object.
+    pub fn mesh_objects(&self, scene: &PreparedScene) -> Vec<u32> {
+        use crate::passes::object_map::MANY;
+        let topology = self.topology(scene_key(scene), scene);
+        // None: no face yet; Some(MANY): faces of several components.
+        let mut objects: Vec<Option<u32>> = vec![None; scene.meshes.len()];
+        for (face, &part) in topology.faces.iter().zip(&topology.face_part) {
+            let c = topology.components[face[0] as usize];
+            let o = &mut objects[part as usize];
+            *o = Some(match *o {
+                None => c,
+                Some(x) if x == c => c,
+                Some(_) => MANY,
+            });
+        }
+        // A mesh none of whose faces survived (a duplicate of another) is
+        // the object its welded corners belong to.
+        let mut base = 0usize;
+        let mut out = Vec::with_capacity(objects.len());
+        for (mesh, o) in scene.meshes.iter().zip(objects) {
+            let first = mesh.faces.first().map(|f| topology.components[topology.weld[base + f[0] as usize] as usize]);
+            out.push(o.or(first).unwrap_or(MANY));
+            base += mesh.vertices.len();
+        }
+        out
     }
 
     /// Silhouette edges of the scene (`edges`), less those hidden from the

@@ -108,6 +108,10 @@ pub struct Topology {
     pub boundary_edges: usize,
     /// Edges with more than two faces, or two faces of the same winding.
     pub non_manifold_edges: usize,
+    /// The connected surface each welded vertex belongs to (faces sharing a
+    /// vertex are connected), named by its smallest vertex: one object as
+    /// the light sees it, however many meshes or pieces it came in.
+    pub components: Vec<u32>,
     pub stats: ConnectivityStats,
 }
 
@@ -316,7 +320,13 @@ impl Topology {
         let non_manifold_edges = non_manifold.len();
         stats.open_edges = boundary_edges;
         stats.non_manifold_edges = non_manifold_edges;
-        Self { weld, positions, faces, face_part, edges, non_manifold, boundary_edges, non_manifold_edges, stats }
+        let mut connected = Clusters((0..positions.len() as u32).collect());
+        for f in &faces {
+            connected.union(f[0], f[1]);
+            connected.union(f[0], f[2]);
+        }
+        let components = (0..positions.len() as u32).map(|v| connected.find(v)).collect();
+        Self { weld, positions, faces, face_part, edges, non_manifold, boundary_edges, non_manifold_edges, components, stats }
     }
 
     /// Refuses surfaces that are not closed 2-manifolds (what PVM assumes,
@@ -609,6 +619,24 @@ mod tests {
         let parts = [Part { vertices: &floor, faces: &[[0, 2, 1]] }, Part { vertices: &p, faces: &f }];
         let t = Topology::from_parts(&parts, WELD_TOLERANCE);
         assert_eq!((t.positions.len(), t.stats.corners_welded, t.stats.pieces_joined), (9, 0, 0));
+        // Two objects: the floor's corners one, the octahedron's another.
+        let floor_object = t.components[t.weld[0] as usize];
+        assert!(t.weld[..3].iter().all(|&v| t.components[v as usize] == floor_object));
+        let mesh_object = t.components[t.weld[3] as usize];
+        assert!(mesh_object != floor_object && t.weld[3..].iter().all(|&v| t.components[v as usize] == mesh_object));
+    }
+
+    #[test]
+    fn a_surface_in_pieces_is_one_component_and_separate_surfaces_are_not() {
+        let (p, f) = octahedron(DVec3::ZERO, 1.0);
+        let (q, g) = octahedron(DVec3::new(5.0, 0.0, 0.0), 1.0);
+        let (upper, lower) = f.split_at(4);
+        let parts = [Part { vertices: &p, faces: upper }, Part { vertices: &q, faces: &g }, Part { vertices: &p, faces: lower }];
+        let t = Topology::from_parts(&parts, WELD_TOLERANCE);
+        let component = |part_vertex: usize| t.components[t.weld[part_vertex] as usize];
+        // The two halves (parts 0 and 2) weld into one surface; part 1 is its own.
+        assert!((0..6).all(|v| component(v) == component(12 + v)));
+        assert!((6..12).all(|v| component(v) == component(6) && component(v) != component(0)));
     }
 
     #[test]

@@ -245,7 +245,7 @@ proptest! {
 }
 
 fn edge(a: DVec3, b: DVec3, ia: u32, ib: u32) -> SilhouetteEdge {
-    SilhouetteEdge { a, b, ia, ib }
+    SilhouetteEdge { a, b, ia, ib, component: 0 }
 }
 
 fn all_finite_pvm_and_pvmf(edges: &[SilhouetteEdge], l: DVec3, r: f64) {

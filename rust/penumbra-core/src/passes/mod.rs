@@ -2,6 +2,7 @@
 //! map, and the shading of SPEC section 3.
 
 pub mod gbuffer;
+pub mod object_map;
 pub mod samplers;
 pub mod screen;
 pub mod shading;

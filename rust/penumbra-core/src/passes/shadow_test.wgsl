@@ -107,3 +107,41 @@ fn disk_fraction(s: f32, r: f32) -> f32 {
 fn horizon_fraction(t: ShadowTest, p: vec3<f32>, n: vec3<f32>) -> f32 {
     return disk_fraction(-dot(n, t.center.xyz - p), t.center.w);
 }
+
+// Whether a receiver at p whose light centre lies below its tangent plane
+// may see the horizon's sliver of the light (`horizon_fraction`): yes when
+// the first surface from the centre towards p is its own object (its body
+// near the terminator), no when it is another object, which then lies
+// between the light and p on both sides of p's plane (issue 27: a floor
+// between a light below it and a box above). `objects` is the object map
+// (passes/object_map.rs: object + 1, 0 for none or "cannot tell") and `own`
+// the receiver's mesh's object (u32 max: a mesh of several surfaces, which
+// cannot tell its own body from the others). The centre's ray to such a p
+// grazes p's own silhouette as the light sees it (the terminator), so p's
+// texel may have rasterised the surface beyond it: the sliver is taken as
+// hidden only when p's texel and its 8 neighbours all hold another object.
+// The clamp keeps every read inside the map; coordinates outside a
+// frustum's window (none: the fit covers the geometry) would read its rim.
+fn horizon_sliver_seen(t: ShadowTest, objects: texture_2d_array<u32>, p: vec3<f32>, own: u32) -> bool {
+    if (own == 0xffffffffu) {
+        return true;
+    }
+    let m = light_map_point(t.light_space, p);
+    if (!layer_active(t.light_space, m.layer)) {
+        return true;
+    }
+    // The object map is smaller than the shadow map (`object_map::side`);
+    // map coordinates are in the shadow map's texels (light_space.wgsl).
+    let size = vec2<i32>(textureDimensions(objects));
+    let centre = vec2<i32>(floor(m.coords * (f32(size.x) / t.light_space.depth.z)));
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let texel = clamp(centre + vec2<i32>(dx, dy), vec2<i32>(0), size - 1);
+            let first = textureLoad(objects, texel, m.layer, 0).x;
+            if (first == 0u || first == own + 1u) {
+                return true;
+            }
+        }
+    }
+    return false;
+}

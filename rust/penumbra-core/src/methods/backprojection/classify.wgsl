@@ -24,6 +24,9 @@ struct PixelList {
 @group(0) @binding(10) var level_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(11) var<storage, read_write> list: PixelList;
 @group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>, 19>;
+// The object map and each mesh's object (passes/object_map.rs).
+@group(0) @binding(13) var object_map: texture_2d_array<u32>;
+@group(0) @binding(14) var<storage, read> mesh_objects: array<u32>;
 
 // Pixel classes (the `backprojection_class` image).
 const BACKGROUND: f32 = 0.0;
@@ -326,8 +329,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             c = Classified(select(UMBRA, LIT, v > 0.5), v, 0.0, -1.0, 0.0);
         } else {
             let r = bp_receiver(p, n);
+            let own = mesh_objects[min(u32(pixel.normal_texel.w), arrayLength(&mesh_objects) - 1u)];
             if (r.hd >= 1.0) {
                 // The whole light below the horizon.
+                c = Classified(UMBRA, 0.0, 0.0, -1.0, 0.0);
+            } else if (!r.facing && !horizon_sliver_seen(shadow, object_map, p, own)) {
+                // The centre below the horizon and another object than the
+                // receiver's own first from it: that object hides the
+                // horizon's sliver too (the object map; the kernel's texels
+                // behind p's plane are not searched, issue 27).
                 c = Classified(UMBRA, 0.0, 0.0, -1.0, 0.0);
             } else {
                 c = classify(r);

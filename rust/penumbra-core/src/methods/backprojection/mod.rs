@@ -36,6 +36,8 @@ use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec, ParamValue};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::passes::object_map::{self, OBJECT_MAP};
+use crate::passes::volumes::VolumePass;
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 
@@ -215,6 +217,7 @@ pub struct SoftShadowBackprojection {
     visibility: ScreenPass,
     pull_push_layout: Layout,
     pull_push: wgpu::ComputePipeline,
+    object_pass: VolumePass,
 }
 
 impl Method for SoftShadowBackprojection {
@@ -254,7 +257,7 @@ impl Method for SoftShadowBackprojection {
     }
 
     fn cached_passes() -> &'static [CachedPass] {
-        &[CENTRE_MAP, HIERARCHY]
+        &[CENTRE_MAP, HIERARCHY, OBJECT_MAP]
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
@@ -295,6 +298,8 @@ impl Method for SoftShadowBackprojection {
                 storage,
                 layout::storage_buffer_rw,
                 layout::storage_buffer_rw,
+                object_map::map_binding,
+                layout::parameters,
             ],
             &["main"],
         );
@@ -333,7 +338,7 @@ impl Method for SoftShadowBackprojection {
             crate::shaders::compose("methods/backprojection/pull_push.wgsl"),
         );
         let pull_push = layout::compute_pipeline_entry(device, "backprojection::pull_push_pipeline", &module, &pull_push_layout, "main");
-        Self { hierarchy_layout, hierarchy, discontinuity, classify, visibility, pull_push_layout, pull_push }
+        Self { hierarchy_layout, hierarchy, discontinuity, classify, visibility, pull_push_layout, pull_push, object_pass: object_map::pass(device, pool) }
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &BackprojectionParams) -> Result<MethodOutput> {
@@ -352,6 +357,7 @@ impl Method for SoftShadowBackprojection {
             Ok(Arc::new(MinMaxHierarchy { buffer, layout: layout.clone() }))
         })?;
 
+        let objects = object_map::record_if(frame, frame.ctx.light.radius > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
         let uniform = self.uniform(&frame.ctx, params, &hierarchy.layout)?;
         let raw = frame.ctx.screen_texture("backprojection::visibility_sparse");
         let classes = frame.ctx.screen_texture("backprojection::class");
@@ -397,6 +403,8 @@ impl Method for SoftShadowBackprojection {
                 Binding::Texture(&level),
                 Binding::Buffer(&list),
                 Binding::Buffer(&counters),
+                Binding::Texture(&objects.map),
+                Binding::Buffer(&objects.objects),
             ];
             let bind_group = self.classify.bind_group(ctx, &resources);
             self.classify.dispatch(ctx, encoder, "main", &bind_group, ts.and_then(|t| t.compute_part(first, true)));

@@ -290,9 +290,9 @@ mod tests {
         // An edge pointing at the light and collinear silhouette edges.
         let l = DVec3::new(0.0, 5.0, 0.0);
         let edges = vec![
-            SilhouetteEdge { a: DVec3::new(0.0, 1.0, 0.0), b: DVec3::new(0.0, 2.0, 0.0), ia: 0, ib: 1 },
-            SilhouetteEdge { a: DVec3::new(1.0, 1.0, 0.0), b: DVec3::new(2.0, 1.0, 0.0), ia: 2, ib: 3 },
-            SilhouetteEdge { a: DVec3::new(2.0, 1.0, 0.0), b: DVec3::new(3.0, 1.0, 0.0), ia: 3, ib: 4 },
+            SilhouetteEdge { a: DVec3::new(0.0, 1.0, 0.0), b: DVec3::new(0.0, 2.0, 0.0), ia: 0, ib: 1, component: 0 },
+            SilhouetteEdge { a: DVec3::new(1.0, 1.0, 0.0), b: DVec3::new(2.0, 1.0, 0.0), ia: 2, ib: 3, component: 0 },
+            SilhouetteEdge { a: DVec3::new(2.0, 1.0, 0.0), b: DVec3::new(3.0, 1.0, 0.0), ia: 3, ib: 4, component: 0 },
         ];
         let VolumeGeometry { vertices, edges: points, stats } = penumbra_volumes(&edges, l, 0.5, 10.0, true);
         assert_eq!(stats.light_parallel_edges, 1);

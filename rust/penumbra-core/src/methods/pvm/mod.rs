@@ -28,6 +28,7 @@ use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::shading::VISIBILITY_FORMAT;
 use crate::passes::screen::ScreenPass;
+use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 use crate::passes::volumes::VolumePass;
@@ -84,6 +85,7 @@ pub fn volumes_key(params: &PvmParams, projection: &LightProjection, (l, r): (DV
 
 pub struct PenumbraVolumeMaps {
     volume_pass: VolumePass,
+    object_pass: VolumePass,
     visibility: ScreenPass,
     edge_maps_pipeline: wgpu::ComputePipeline,
     edge_maps_layout: Layout,
@@ -143,7 +145,7 @@ impl Method for PenumbraVolumeMaps {
     }
 
     fn cached_passes() -> &'static [CachedPass] {
-        &[CENTRE_MAP, PENUMBRA_VOLUMES]
+        &[CENTRE_MAP, PENUMBRA_VOLUMES, OBJECT_MAP]
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
@@ -170,6 +172,8 @@ impl Method for PenumbraVolumeMaps {
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
                 layout::storage_buffer_rw,
+                object_map::map_binding,
+                layout::parameters,
             ],
             &["main"],
         );
@@ -180,7 +184,7 @@ impl Method for PenumbraVolumeMaps {
         );
         let edge_maps_pipeline =
             layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shaders::compose("methods/pvm/edge_maps.wgsl"), &edge_maps_layout);
-        Self { volume_pass, visibility, edge_maps_pipeline, edge_maps_layout }
+        Self { volume_pass, object_pass: object_map::pass(device, pool), visibility, edge_maps_pipeline, edge_maps_layout }
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmParams) -> Result<MethodOutput> {
@@ -195,6 +199,7 @@ impl Method for PenumbraVolumeMaps {
             fresh = true;
             self.record_volumes(frame, params, &projection).map(Arc::new)
         })?;
+        let objects = object_map::record_if(frame, params.repairs.horizon && light.radius > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
         let visibility = frame.ctx.screen_texture("pvm::visibility");
         let membership = frame.ctx.screen_texture("pvm::in_volume");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
@@ -213,6 +218,8 @@ impl Method for PenumbraVolumeMaps {
                 Binding::Texture(&visibility),
                 Binding::Texture(&membership),
                 Binding::Buffer(&counter),
+                Binding::Texture(&objects.map),
+                Binding::Buffer(&objects.objects),
             ];
             self.visibility.run(ctx, encoder, &resources, ts);
             counter

@@ -22,6 +22,9 @@ struct EdgePoints {
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var<storage, read_write> pixels_in_volume: atomic<u32>;
+// The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
+@group(0) @binding(10) var object_map: texture_2d_array<u32>;
+@group(0) @binding(11) var<storage, read> mesh_objects: array<u32>;
 
 // v / |v| without overflow or underflow for any finite v (zero for zero):
 // scaled by its largest component first, so that the squares stay near 1.
@@ -86,9 +89,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         // for the surface's horizon test): the fraction of the light above
         // the receiver's tangent plane, by Eq. 4.1 with that plane as the
         // cutting plane. It bounds the visibility; a receiver whose centre
-        // lies below its horizon sees that fraction of the light (other
-        // occluders of that sliver are not looked for: the shadow map from
-        // the centre cannot tell them from the receiver's own object).
+        // lies below its horizon sees that fraction of the light, unless the
+        // object map says another object than its own hides the centre
+        // (`horizon_sliver_seen`).
         var k_h = 1.0;
         if (horizon) {
             k_h = horizon_fraction(pvm, p, n);
@@ -130,7 +133,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 v = min(v, k_h);
             }
         } else if (horizon) {
-            v = k_h;
+            let own = mesh_objects[min(u32(pixel.normal_texel.w), arrayLength(&mesh_objects) - 1u)];
+            v = select(0.0, k_h, horizon_sliver_seen(pvm, object_map, p, own));
         }
     }
     textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));

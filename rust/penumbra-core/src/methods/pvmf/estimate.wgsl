@@ -34,6 +34,9 @@ var<private> settings: PvmfSettings;
 @group(0) @binding(10) var filter_width_out: texture_storage_2d<r32float, write>;
 // masked, filtered, blurred pixels.
 @group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>, 3>;
+// The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
+@group(0) @binding(12) var object_map: texture_2d_array<u32>;
+@group(0) @binding(13) var<storage, read> mesh_objects: array<u32>;
 
 // d_o (5.2): the mean of the d_e channel over a 5 x 5 texel region (3 x 3
 // taps, 2 texels apart) around the receiver's projection, over texels that
@@ -147,10 +150,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 v = min(v, horizon_fraction(pvmf, p, n));
             }
         } else if (horizon) {
-            // Only the sliver of the light above the horizon is seen; other
-            // occluders of it are not looked for (the map from the centre
-            // cannot tell them from the receiver's own object).
-            v = horizon_fraction(pvmf, p, n);
+            // Only the sliver of the light above the horizon is seen, unless
+            // another object than the receiver's own hides the centre.
+            let own = mesh_objects[min(u32(pixel.normal_texel.w), arrayLength(&mesh_objects) - 1u)];
+            v = select(0.0, horizon_fraction(pvmf, p, n), horizon_sliver_seen(pvmf, object_map, p, own));
         }
     }
     textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));

@@ -125,7 +125,7 @@ mod tests {
     use super::*;
 
     fn edge(a: [f64; 3], b: [f64; 3]) -> SilhouetteEdge {
-        SilhouetteEdge { a: DVec3::from(a), b: DVec3::from(b), ia: 0, ib: 1 }
+        SilhouetteEdge { a: DVec3::from(a), b: DVec3::from(b), ia: 0, ib: 1, component: 0 }
     }
 
     /// The far corners of an edge's outer and inner quadrilaterals at `reach`.

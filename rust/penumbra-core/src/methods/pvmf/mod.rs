@@ -34,6 +34,7 @@ use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::samplers::Filter;
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 use crate::passes::volumes::VolumePass;
@@ -173,6 +174,7 @@ pub struct PenumbraVolumeMaskFiltering {
     mask_pass: VolumePass,
     estimate: ScreenPass,
     blur: ScreenPass,
+    object_pass: VolumePass,
 }
 
 impl Method for PenumbraVolumeMaskFiltering {
@@ -245,7 +247,7 @@ impl Method for PenumbraVolumeMaskFiltering {
     }
 
     fn cached_passes() -> &'static [CachedPass] {
-        &[CENTRE_MAP, MASK, ESTIMATION]
+        &[CENTRE_MAP, MASK, ESTIMATION, OBJECT_MAP]
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
@@ -275,6 +277,8 @@ impl Method for PenumbraVolumeMaskFiltering {
                 storage,
                 storage,
                 layout::storage_buffer_rw,
+                object_map::map_binding,
+                layout::parameters,
             ],
             &["main"],
         );
@@ -286,7 +290,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             &[layout::float_texture, layout::float_texture, layout::parameters, storage, layout::storage_buffer_rw],
             &["main"],
         );
-        Self { mask_pass, estimate, blur }
+        Self { mask_pass, estimate, blur, object_pass: object_map::pass(device, pool) }
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmfParams) -> Result<MethodOutput> {
@@ -307,7 +311,10 @@ impl Method for PenumbraVolumeMaskFiltering {
         let mut key = PassKey::new(ESTIMATION.name);
         key.key(&frame.ctx.gbuffer_key).key(&shadow_map::centre_map_key(&frame.ctx, &params.shadow, &projection)).key(&mask_key);
         estimate_key(params, &projection, (light.center_f32, light.radius_f32), &mut key);
+        // The object map is a function of the centre map's key (geometry,
+        // projection, map size), which the estimate's key holds.
         let estimate = frame.cached(ESTIMATION.name, key.finish(), |frame| {
+            let objects = object_map::record_if(frame, params.repairs.horizon && r > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
             let estimate = PvmfEstimate {
                 raw: frame.ctx.screen_texture("pvmf::visibility_raw"),
                 blur_mask: frame.ctx.screen_texture("pvmf::blur_mask"),
@@ -334,6 +341,8 @@ impl Method for PenumbraVolumeMaskFiltering {
                     Binding::Texture(&estimate.blur_mask),
                     Binding::Texture(&estimate.filter_width),
                     Binding::Buffer(&estimate.counters),
+                    Binding::Texture(&objects.map),
+                    Binding::Buffer(&objects.objects),
                 ];
                 self.estimate.run(ctx, encoder, &resources, ts);
             })?;

@@ -23,7 +23,8 @@ pub struct WedgeGpu {
     pub a: [f32; 4],
     /// Edge end (xyz); equal to `a` for an extra wedge at a vertex.
     pub b: [f32; 4],
-    /// Unit direction of the edge (xyz), the ray direction of Eq. 3.
+    /// Unit direction of the edge (xyz), the ray direction of Eq. 3; w: the
+    /// connected surface it lies on (`SilhouetteEdge::component`).
     pub dir: [f32; 4],
     /// Front plane (through `f = c - r n`): the wedge is where it is <= 0.
     pub front: [f32; 4],
@@ -249,7 +250,12 @@ pub fn penumbra_wedges(edges: &[SilhouetteEdge], l: DVec3, r: f64, acute_wedges:
     let mut stats = WedgeStats { silhouette_edges: edges.len(), ..Default::default() };
     // Edges with an SV quad, by silhouette edge.
     let mut built: Vec<(usize, WedgeEdge)> = Vec::with_capacity(edges.len());
-    for (i, e) in edges.iter().enumerate() {
+    // Grouped by connected surface (stable), so that every tile's list holds
+    // each object's wedges together (`occluders = "independent"`).
+    let mut order: Vec<usize> = (0..edges.len()).collect();
+    order.sort_by_key(|&i| edges[i].component);
+    for i in order {
+        let e = &edges[i];
         let along = e.b - e.a;
         let len = along.length();
         match (len > 0.0).then(|| edge_planes(e.a, e.b, along / len, l, r)).flatten() {
@@ -283,9 +289,11 @@ pub fn penumbra_wedges(edges: &[SilhouetteEdge], l: DVec3, r: f64, acute_wedges:
     // For each built edge, its index in `list`, and its chain of extras.
     let mut position = vec![0usize; built.len()];
     let mut chains: Vec<Vec<usize>> = vec![Vec::new(); built.len()];
-    for (k, (_, e)) in built.iter().enumerate() {
+    let mut component: Vec<u32> = Vec::with_capacity(built.len());
+    for (k, (i, e)) in built.iter().enumerate() {
         position[k] = list.len();
         list.push(*e);
+        component.push(edges[*i].component);
         left.push(None);
         right.push(None);
         if let Some(k1) = next[k] {
@@ -294,6 +302,7 @@ pub fn penumbra_wedges(edges: &[SilhouetteEdge], l: DVec3, r: f64, acute_wedges:
             for x in extra {
                 chains[k].push(list.len());
                 list.push(x);
+                component.push(edges[*i].component);
                 left.push(None);
                 right.push(None);
             }
@@ -336,7 +345,10 @@ pub fn penumbra_wedges(edges: &[SilhouetteEdge], l: DVec3, r: f64, acute_wedges:
         wedges.push(WedgeGpu {
             a: point4(e.a),
             b: point4(e.b),
-            dir: plane4(e.dir),
+            // w: the edge's connected surface, exact in f32 below 2^24
+            // vertices (beyond, neighbouring ids may round together: those
+            // objects then add as one, the AAM sum).
+            dir: [e.dir.x as f32, e.dir.y as f32, e.dir.z as f32, component[i] as f32],
             front: plane4(e.front),
             back: plane4(e.back),
             hard: plane4(e.n),
@@ -643,7 +655,7 @@ mod tests {
     use super::*;
 
     fn edge(a: DVec3, b: DVec3, ia: u32, ib: u32) -> SilhouetteEdge {
-        SilhouetteEdge { a, b, ia, ib }
+        SilhouetteEdge { a, b, ia, ib, component: 0 }
     }
 
     /// The outline of a convex polygon at height y, seen from above, oriented

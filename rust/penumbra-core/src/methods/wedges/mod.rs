@@ -43,7 +43,9 @@ use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::volumes::VolumePass;
 use crate::passes::shadow_test::ShadowMapSettings;
 use crate::silhouettes::{OpenEdges, Repairs};
 
@@ -74,6 +76,9 @@ pub struct WedgesParams {
     /// hard shadow is shadowed by something else (`"gate"`), or its term all
     /// the same (`"sum"`, both papers').
     pub overlap_gate: bool,
+    /// Whether separate objects' terms multiply as independent occluders
+    /// (`"independent"`) or all add (`"sum"`, both papers').
+    pub independent_occluders: bool,
 }
 
 /// How the light intensity s inside a wedge is computed.
@@ -129,6 +134,7 @@ pub struct WedgeBuffers {
 
 pub struct PenumbraWedges {
     visibility: ScreenPass,
+    object_pass: VolumePass,
 }
 
 impl Method for PenumbraWedges {
@@ -164,6 +170,12 @@ impl Method for PenumbraWedges {
                 &["sum", "gate"],
                 "silhouettes that overlap as the light sees them (folds, several casters): every wedge's term summed, as both papers, or a wedge's term dropped where the map, read at the pixel moved just outside the hard shadow its edge casts, is in shadow too (another surface right behind the edge covers what it would uncover or hide)",
             ),
+            ParamSpec::choice(
+                "occluders",
+                "sum",
+                &["sum", "independent"],
+                "separate objects (connected surfaces, however many meshes they come in) whose penumbrae overlap: every wedge's term summed with the hard shadow, as both papers, or each object's terms summed alone, its visible fraction taken, and the objects' fractions multiplied as independent occluders (worse at the median of the generated scenes, better in their worst case: docs/methods/wedges.md)",
+            ),
             ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
             ParamSpec::choice(
                 "open_edges",
@@ -196,11 +208,12 @@ impl Method for PenumbraWedges {
             hard_term: if p.choice("hard_term") == "lit_side" { HardTerm::LitSide } else { HardTerm::AtPoint },
             intensity: if p.choice("intensity") == "coverage" { Intensity::Coverage } else { Intensity::Interpolation },
             overlap_gate: p.choice("overlap") == "gate",
+            independent_occluders: p.choice("occluders") == "independent",
         })
     }
 
     fn cached_passes() -> &'static [CachedPass] {
-        &[CENTRE_MAP, PENUMBRA_WEDGES]
+        &[CENTRE_MAP, PENUMBRA_WEDGES, OBJECT_MAP]
     }
 
     fn new(device: &wgpu::Device, pool: &crate::gpu::pool::ResourcePool) -> Self {
@@ -220,10 +233,12 @@ impl Method for PenumbraWedges {
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
                 layout::storage_buffer_rw,
+                object_map::map_binding,
+                layout::parameters,
             ],
             &["main"],
         );
-        Self { visibility }
+        Self { visibility, object_pass: object_map::pass(device, pool) }
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &WedgesParams) -> Result<MethodOutput> {
@@ -241,6 +256,7 @@ impl Method for PenumbraWedges {
             fresh = true;
             Self::record_wedges(frame, params).map(Arc::new)
         })?;
+        let objects = object_map::record_if(frame, params.repairs.horizon && light.radius > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
         let visibility = frame.ctx.screen_texture("wedges::visibility");
         let hard = frame.ctx.screen_texture("wedges::hard");
         let intensity = frame.ctx.screen_texture("wedges::intensity");
@@ -251,7 +267,8 @@ impl Method for PenumbraWedges {
                 | (u32::from(params.repairs.horizon) << 1)
                 | (u32::from(params.hard_term == HardTerm::LitSide) << 2)
                 | (u32::from(coverage) << 3)
-                | (u32::from(params.overlap_gate) << 4);
+                | (u32::from(params.overlap_gate) << 4)
+                | (u32::from(params.independent_occluders) << 5);
             let test = ctx.parameters("wedges::shadow_test", &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0));
             let settings = ctx.parameters("wedges::settings", &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count] });
             let resources = [
@@ -265,6 +282,8 @@ impl Method for PenumbraWedges {
                 Binding::Texture(&hard),
                 Binding::Texture(&intensity),
                 Binding::Buffer(&counter),
+                Binding::Texture(&objects.map),
+                Binding::Buffer(&objects.objects),
             ];
             self.visibility.run(ctx, encoder, &resources, ts);
             counter

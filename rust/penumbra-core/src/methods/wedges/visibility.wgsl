@@ -28,7 +28,8 @@ struct Wedge {
 struct WedgeSettings {
     // x: tile size in pixels; y: tiles per row; z: flags (bit 0: falloff,
     // bit 1: repair "horizon", bit 2: hard_term "lit_side", bit 3: intensity
-    // "coverage", bit 4: overlap "gate"); w: wedge count.
+    // "coverage", bit 4: overlap "gate", bit 5: occluders "independent");
+    // w: wedge count.
     tiles: vec4<u32>,
 };
 
@@ -42,6 +43,9 @@ struct WedgeSettings {
 @group(0) @binding(9) var hard_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(10) var intensity_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(11) var<storage, read_write> pixels_in_wedge: atomic<u32>;
+// The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
+@group(0) @binding(12) var object_map: texture_2d_array<u32>;
+@group(0) @binding(13) var<storage, read> mesh_objects: array<u32>;
 
 // Eq. 1-2 along the side ray u: p's distances to the front plane (F <= 0
 // inside) and the back plane (B >= 0 inside), as fractions of the chord.
@@ -194,6 +198,32 @@ fn coverage_term(w: Wedge, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
 // moved off it for the shadow-map read (see main).
 const CONSISTENCY_TEXELS: f32 = 2.0;
 
+// occluders "independent" (beyond both papers, whose wedges all add): the
+// terms of one object (a connected surface; a tile lists each object's
+// wedges together, `Wedge.dir.w`) sum to its own change to the hard term,
+// s > 0 where the centre lies in its hard shadow (the part of the light it
+// leaves visible) and s <= 0 where it does not (minus the part it covers).
+// Objects combine as independent occluders: visibility is the product of
+// the parts each leaves visible. One object alone gives the sum's result.
+struct Objects {
+    // Product of 1 + s over objects with s <= 0 (the parts they leave).
+    leave: f32,
+    // Product of min(s, 1) over objects with s > 0, and whether any has.
+    uncover: f32,
+    any_uncover: bool,
+};
+
+fn fold_object(o: Objects, s: f32) -> Objects {
+    var out = o;
+    if (s > 0.0) {
+        out.uncover = out.uncover * min(s, 1.0);
+        out.any_uncover = true;
+    } else {
+        out.leave = out.leave * max(1.0 + s, 0.0);
+    }
+    return out;
+}
+
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let pixel = screen_pixel(id);
@@ -231,6 +261,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             let start = tile_offsets[t];
             let end = tile_offsets[t + 1u];
             var inside = false;
+            let independent = (settings.tiles.z & 32u) != 0u;
+            var objects = Objects(1.0, 1.0, false);
+            var object = -1.0;
+            var object_terms = 0.0;
             for (var i = start; i < end; i = i + 1u) {
                 let w = wedges[tile_wedges[i]];
                 var term: vec2<f32>;
@@ -263,6 +297,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 }
                 if (term.y > 0.0) {
                     terms = terms + term.x;
+                    if (w.dir.w != object) {
+                        if (object >= 0.0) {
+                            objects = fold_object(objects, object_terms);
+                        }
+                        object = w.dir.w;
+                        object_terms = 0.0;
+                    }
+                    object_terms = object_terms + term.x;
                     inside = true;
                     let d = dot(w.hard.xyz, p - w.a.xyz);
                     // The side the map is read on: h(p)'s, or always the lit one.
@@ -287,11 +329,25 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 atomicAdd(&pixels_in_wedge, 1u);
             }
             v = clamp(intensity, 0.0, 1.0);
+            if (independent && inside) {
+                objects = fold_object(objects, object_terms);
+                // Centre lit: the objects' left parts; hidden: the parts
+                // that the hiding objects uncover, less what the others
+                // cover (none uncovering: an umbra no wedge reaches).
+                if (hard > 0.0) {
+                    v = objects.leave;
+                } else {
+                    v = select(0.0, objects.uncover * objects.leave, objects.any_uncover);
+                }
+                intensity = v;
+            }
             if (horizon) {
                 v = min(v, k_h);
             }
         } else if (horizon) {
-            v = k_h;
+            // Only the sliver above the horizon, unless another object hides the centre.
+            let own = mesh_objects[min(u32(pixel.normal_texel.w), arrayLength(&mesh_objects) - 1u)];
+            v = select(0.0, k_h, horizon_sliver_seen(wedge_test, object_map, p, own));
         }
     }
     textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));

@@ -1,0 +1,111 @@
+//! The object map: for every texel of the light centre's map, which object
+//! (connected surface) is the first surface seen from the light (0: none).
+//! The silhouette methods' `horizon` repair reads it (issue 27): a receiver
+//! whose light centre lies below its tangent plane sees the sliver of the
+//! light above that plane only where the surface hiding the centre from it
+//! is its own object (the receiver's body, near its terminator); where
+//! another object is first (a floor between a light below it and a box
+//! above), that object hides the sliver too.
+//!
+//! Objects come from the silhouette layer's connectivity
+//! ([`SilhouetteCache::mesh_objects`](crate::silhouettes::SilhouetteCache::mesh_objects)):
+//! a mesh that is one connected surface, or a piece of one spread over
+//! several meshes, is that surface's object; a mesh of several separate
+//! surfaces (a room's walls and furniture in one file) is [`MANY`], and its
+//! receivers keep the sliver whatever hides their centre.
+
+use std::sync::Arc;
+
+use crate::error::Result;
+use crate::frame::{Frame, FrameContext};
+use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool};
+use crate::light_frustum::LightProjection;
+use crate::pass_cache::{CachedPass, PassKey};
+use crate::passes::volumes::VolumePass;
+
+/// The object map and the per-mesh object table, as the pass cache keeps them.
+pub const OBJECT_MAP: CachedPass = CachedPass { name: "object_map", capacity: 2 };
+
+pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+
+/// The object of a mesh made of several separate surfaces: it cannot tell
+/// its own body from another surface of the same mesh.
+pub const MANY: u32 = u32::MAX;
+
+/// One corner as the object-map raster reads it.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ObjectVertex {
+    position: [f32; 3],
+    object: u32,
+}
+
+/// The raster pass (one per method that reads the map).
+pub fn pass(device: &wgpu::Device, pool: &ResourcePool) -> VolumePass {
+    VolumePass::new::<ObjectVertex>(
+        device,
+        pool,
+        "object_map",
+        crate::shaders::compose("passes/object_map.wgsl"),
+        ("vs_main", "fs_main"),
+        &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
+        &[FORMAT],
+    )
+}
+
+/// The map over `projection` at `map_size`, and the table of each mesh's
+/// object (`objects[mesh_index]`, [`MANY`] for a mesh of several surfaces),
+/// for the G-buffer's mesh index of a receiver.
+pub struct ObjectMap {
+    pub map: PooledTexture,
+    pub objects: PooledBuffer,
+}
+
+/// The two bindings a screen pass reads the map through: the map
+/// (`texture_2d_array<u32>`) and the per-mesh table (storage, read).
+pub fn map_binding(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    crate::gpu::layout::array_texture(binding, wgpu::TextureSampleType::Uint)
+}
+
+/// The map when `needed` (the `horizon` repair), or a 1-texel stand-in that
+/// the shaders do not read.
+pub fn record_if(frame: &mut Frame<'_>, needed: bool, pass: &VolumePass, projection: &LightProjection, map_size: u32) -> Result<Arc<ObjectMap>> {
+    if needed {
+        return record(frame, pass, projection, map_size);
+    }
+    let ctx = &frame.ctx;
+    let map = ctx.light_texture("object_map::none", 1, 1, FORMAT, wgpu::TextureUsages::TEXTURE_BINDING);
+    Ok(Arc::new(ObjectMap { map, objects: table(ctx, &[MANY]) }))
+}
+
+/// The object map's side for a shadow map of `map_size`: a quarter of it
+/// (at least 64 texels). The test asks only whether p's neighbourhood holds
+/// its own object anywhere, a question of which object covers a region and
+/// not of where an edge falls within a texel, and the map costs as much as
+/// the shadow map at full size (the silhouette methods' time went up by 30-50%).
+pub fn side(map_size: u32) -> u32 {
+    (map_size / 4).max(64).min(map_size)
+}
+
+fn record(frame: &mut Frame<'_>, pass: &VolumePass, projection: &LightProjection, map_size: u32) -> Result<Arc<ObjectMap>> {
+    let map_size = side(map_size);
+    let key = PassKey::new(OBJECT_MAP.name).bytes(&frame.ctx.geometry).projection(projection).u32(map_size).finish();
+    frame.cached(OBJECT_MAP.name, key, |frame| {
+        frame.pass(OBJECT_MAP.name, |ctx, encoder, ts| -> Result<Arc<ObjectMap>> {
+            let objects = ctx.shared.silhouettes.mesh_objects(ctx.prepared);
+            let vertices: Vec<ObjectVertex> =
+                ctx.prepared.corners.iter().map(|c| ObjectVertex { position: c.position, object: objects[c.mesh_index as usize] }).collect();
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+            let map = ctx.light_texture("object_map::map", map_size, projection.layers(), FORMAT, usage);
+            pass.record(ctx, encoder, projection, &vertices, map_size, &[&map], ts)?;
+            Ok(Arc::new(ObjectMap { map, objects: table(ctx, &objects) }))
+        })?
+    })
+}
+
+fn table(ctx: &FrameContext<'_>, objects: &[u32]) -> PooledBuffer {
+    let bytes: &[u8] = bytemuck::cast_slice(objects);
+    let buffer = ctx.buffer("object_map::objects", bytes.len().max(16) as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
+    ctx.queue.write_buffer(&buffer, 0, bytes);
+    buffer
+}
