@@ -203,7 +203,7 @@ pub fn gpu_structs() -> Vec<GpuStruct> {
         gpu_struct!(gbuffer::CameraUniforms => "CameraUniforms" in "passes/gbuffer.wgsl" { view_proj, view }),
         gpu_struct!(shading::ShadingUniforms => "ShadingUniforms" in "passes/shading.wgsl" { light, intensity, ambient, eye }),
         gpu_struct!(pcf::PcfUniform => "PcfKernel" in "methods/pcf/visibility.wgsl" { kernel, samples, seed, nearest }),
-        gpu_struct!(pcss::PcssUniform => "PcssSampling" in "methods/pcss/visibility.wgsl" { blocker_samples, filter_samples, seed, poisson, cone }),
+        gpu_struct!(pcss::PcssUniform => "PcssSampling" in "methods/pcss/visibility.wgsl" { blocker_samples, filter_samples, seed, poisson, cone, horizon }),
         gpu_struct!(reference::SampleWeightUniform => "SampleWeight" in "methods/reference/visibility.wgsl" { normal, light_center }),
         gpu_struct!(adaptive::CellCompareUniform => "CellCompare" in "methods/adaptive/compare.wgsl" { tests, cell }),
         gpu_struct!(pvm::EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" { h0, h1 }),

@@ -23,7 +23,9 @@ use crate::pass_cache::CachedPass;
 use crate::passes::samplers::Filter;
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::volumes::VolumePass;
 use crate::passes::shadow_test::ShadowMapSettings;
 
 /// Points in the Poisson-disk set of `methods/pcss/visibility.wgsl`.
@@ -64,6 +66,10 @@ pub struct PcssParams {
     pub filter: Filter,
     pub sampling: Sampling,
     pub blocker_test: BlockerTest,
+    /// The light above the receiver's tangent plane bounds its visibility,
+    /// and is all it sees where the centre has set below that plane (the
+    /// silhouette methods' `horizon` repair); off: the paper's centre test.
+    pub horizon: bool,
 }
 
 /// Layout of `PcssSampling` in `methods/pcss/visibility.wgsl`.
@@ -76,6 +82,8 @@ pub struct PcssUniform {
     pub(crate) poisson: u32,
     /// 1: `BlockerTest::Cone`.
     pub(crate) cone: u32,
+    /// 1: `PcssParams::horizon`.
+    pub(crate) horizon: u32,
 }
 
 /// Names of the pass's counters, in order: pixels that ran the blocker
@@ -84,6 +92,7 @@ pub const COUNTER_NAMES: &[&str] = &["blocker_search_pixels", "filtered_pixels"]
 
 pub struct PercentageCloserSoftShadows {
     visibility: ScreenPass,
+    object_pass: VolumePass,
 }
 
 impl Method for PercentageCloserSoftShadows {
@@ -105,6 +114,11 @@ impl Method for PercentageCloserSoftShadows {
                 &BlockerTest::NAMES,
                 "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers)",
             ),
+            ParamSpec::bool(
+                "horizon",
+                true,
+                "bound the visibility by the part of the light above the receiver's tangent plane, and where the light's centre has set below it give that sliver, unless another object than the receiver's own hides the centre (the object map; pvm's repair 'horizon'); false: the paper's test of the centre alone",
+            ),
         ]);
         specs
     }
@@ -118,6 +132,7 @@ impl Method for PercentageCloserSoftShadows {
             filter: Filter::from_params(p),
             sampling: if p.choice("sampling") == "poisson" { Sampling::Poisson } else { Sampling::Grid },
             blocker_test: if p.choice("blocker_test") == "cone" { BlockerTest::Cone } else { BlockerTest::Plane },
+            horizon: p.bool("horizon"),
         };
         if params.sampling == Sampling::Poisson {
             for (name, n) in [("blocker_samples", params.blocker_samples), ("filter_samples", params.filter_samples)] {
@@ -133,7 +148,7 @@ impl Method for PercentageCloserSoftShadows {
     }
 
     fn cached_passes() -> &'static [CachedPass] {
-        &[CENTRE_MAP]
+        &[CENTRE_MAP, OBJECT_MAP]
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
@@ -151,15 +166,18 @@ impl Method for PercentageCloserSoftShadows {
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
                 |b| layout::storage_texture(b, VISIBILITY_FORMAT),
                 layout::storage_buffer_rw,
+                object_map::map_binding,
+                layout::parameters,
             ],
             &["main"],
         );
-        Self { visibility }
+        Self { visibility, object_pass: object_map::pass(device, pool) }
     }
 
     /// Blocker search, penumbra estimate and filter per G-buffer pixel.
     fn record(&self, frame: &mut Frame<'_>, params: &PcssParams) -> Result<MethodOutput> {
         let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let objects = object_map::record_if(frame, params.horizon && frame.ctx.light.radius > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
         let visibility = frame.ctx.screen_texture("pcss::visibility");
         // Estimated penumbra width in map texels and mean blocker depth in
         // world units (camera space, 0 where not computed).
@@ -177,6 +195,7 @@ impl Method for PercentageCloserSoftShadows {
                 seed: params.seed,
                 poisson: u32::from(params.sampling == Sampling::Poisson),
                 cone: u32::from(params.blocker_test == BlockerTest::Cone),
+                horizon: u32::from(params.horizon),
             };
             let sampling = ctx.parameters("pcss::sampling_uniforms", &sampling);
             let resources = [
@@ -188,6 +207,8 @@ impl Method for PercentageCloserSoftShadows {
                 Binding::Texture(&penumbra_width),
                 Binding::Texture(&blocker_depth),
                 Binding::Buffer(&counters),
+                Binding::Texture(&objects.map),
+                Binding::Buffer(&objects.objects),
             ];
             self.visibility.run(ctx, encoder, &resources, ts);
             counters

@@ -21,6 +21,8 @@ struct PcssSampling {
     poisson: u32,
     // 1: blocker_test "cone"; 0: "plane" (the paper's).
     cone: u32,
+    // 1: the horizon repair (parameter `horizon`).
+    horizon: u32,
 };
 
 struct PcssPixel {
@@ -46,6 +48,9 @@ var<private> pcss: PcssSampling;
 @group(0) @binding(8) var blocker_out: texture_storage_2d<r32float, write>;
 // [0]: pixels that ran the blocker search; [1]: pixels that ran the filter.
 @group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>, 2>;
+// The object map and each mesh's object (passes/object_map.rs), for `horizon`.
+@group(0) @binding(10) var object_map: texture_2d_array<u32>;
+@group(0) @binding(11) var<storage, read> mesh_objects: array<u32>;
 
 // Mitchell's best-candidate points in the unit disk (scripts/poisson_disk.py):
 // every prefix is itself well spread, so the first n x n serve for any n <= 8.
@@ -141,10 +146,14 @@ fn in_light_cone(p: vec3<f32>, q: vec3<f32>, slack: f32) -> bool {
     return acos(cos_angle) <= asin(sin_cone) + slack;
 }
 
-fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> PcssPixel {
+fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssPixel {
     var out = PcssPixel(0.0, 0.0, 0.0);
-    // Centre below the surface's horizon: the surface itself hides it (as `hard`).
+    // Centre below the surface's horizon: the surface itself hides it (as
+    // `hard`), but for the sliver of the light above it with `horizon`.
     if (light_cosine(shadow, p, n) <= 0.0) {
+        if (pcss.horizon == 1u && shadow.center.w > 0.0 && horizon_sliver_seen(shadow, object_map, p, own)) {
+            out.v = horizon_fraction(shadow, p, n);
+        }
         return out;
     }
     let radius = shadow.center.w;
@@ -239,7 +248,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let px = pixel.px;
     var o = PcssPixel(0.0, 0.0, 0.0);
     if (pixel.geometry) {
-        o = pcss_visibility(id.xy, pixel.p, pixel.n);
+        let own = mesh_objects[min(u32(pixel.normal_texel.w), arrayLength(&mesh_objects) - 1u)];
+        o = pcss_visibility(id.xy, pixel.p, pixel.n, own);
+        // `horizon`: no more of the light than lies above the tangent plane.
+        if (pcss.horizon == 1u && shadow.center.w > 0.0) {
+            o.v = min(o.v, horizon_fraction(shadow, pixel.p, pixel.n));
+        }
     }
     textureStore(visibility_out, px, vec4<f32>(o.v, 0.0, 0.0, 0.0));
     textureStore(width_out, px, vec4<f32>(o.width, 0.0, 0.0, 0.0));
