@@ -41,7 +41,7 @@ pub const FILES: &[(&str, &str)] = &[
     ("passes/gbuffer.wgsl", include_str!("passes/gbuffer.wgsl")),
     ("passes/shadow_map.wgsl", include_str!("passes/shadow_map.wgsl")),
     ("passes/shading.wgsl", include_str!("passes/shading.wgsl")),
-    ("passes/object_map.wgsl", include_str!("passes/object_map.wgsl")),
+    ("passes/light_ids.wgsl", include_str!("passes/light_ids.wgsl")),
     ("methods/hard/visibility.wgsl", include_str!("methods/hard/visibility.wgsl")),
     ("methods/pcf/visibility.wgsl", include_str!("methods/pcf/visibility.wgsl")),
     ("methods/pcss/visibility.wgsl", include_str!("methods/pcss/visibility.wgsl")),
