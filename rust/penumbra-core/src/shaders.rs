@@ -49,7 +49,6 @@ pub const FILES: &[(&str, &str)] = &[
     ("methods/adaptive/compare.wgsl", include_str!("methods/adaptive/compare.wgsl")),
     ("methods/adaptive/evaluate.wgsl", include_str!("methods/adaptive/evaluate.wgsl")),
     ("methods/raytraced/visibility.wgsl", include_str!("methods/raytraced/visibility.wgsl")),
-    ("methods/pvm/volumes.wgsl", include_str!("methods/pvm/volumes.wgsl")),
     ("methods/pvm/visibility.wgsl", include_str!("methods/pvm/visibility.wgsl")),
     ("methods/pvm/edge_maps.wgsl", include_str!("methods/pvm/edge_maps.wgsl")),
     ("methods/pvmf/mask.wgsl", include_str!("methods/pvmf/mask.wgsl")),

@@ -2,8 +2,8 @@
 
 // A raster from the light of primitives that carry a u32 id: the nearest
 // one's linear light depth / far per texel, and its id + 1 (0 where nothing
-// was drawn). PVM's penumbra volume map (methods/pvm/volumes.wgsl: the id
-// is the volume's silhouette edge) and the object map (passes/object_map.rs:
+// was drawn). PVM's penumbra volume map (methods/pvm/mod.rs: the id is the
+// volume's silhouette edge) and the object map (passes/object_map.rs:
 // the id is the triangle's object) are this pass.
 
 struct VertexIn {

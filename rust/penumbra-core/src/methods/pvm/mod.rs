@@ -38,7 +38,16 @@ pub mod geometry;
 pub use geometry::{penumbra_volumes, EdgePoints, VolumeGeometry, VolumeStats, VolumeVertex};
 
 /// The penumbra volume edge map: the index + 1 of the edge whose volume is
-/// nearest the light (0: none); pvm/volumes.wgsl says why not the paper's points.
+/// nearest the light (0: none), drawn with its depth map by the shared
+/// light-id raster (passes/light_ids.wgsl) in one pass (Cournia 4.1.3).
+///
+/// Departure from 4.1.3: the paper's two edge maps (PVEMs) hold the end
+/// points h0 and h1 of the silhouette edge that gave rise to the volume (six
+/// floats per texel, 16-bit there, 32-bit here). This map holds the edge's
+/// index + 1 and the visibility pass reads h0 and h1 from a buffer of the
+/// edges: the same information, 4 bytes per texel instead of 32. On a
+/// software rasteriser the pass's cost is the bytes it clears and writes
+/// (docs/real_meshes.md).
 pub const EDGE_INDEX_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The `pvm_edge0` / `pvm_edge1` intermediates: the paper's edge maps.
 pub const EDGE_POINT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -153,7 +162,7 @@ impl Method for PenumbraVolumeMaps {
             device,
             pool,
             "pvm::volume_pass",
-            crate::shaders::compose("methods/pvm/volumes.wgsl"),
+            crate::shaders::compose("passes/light_ids.wgsl"),
             ("vs_main", "fs_main"),
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
             &[EDGE_INDEX_FORMAT],

@@ -10,7 +10,7 @@
 
 @group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(3) var volume_depth: texture_depth_2d_array;
-// The penumbra volume edge map (4.1.3), by index into `edges` (pvm/volumes.wgsl).
+// The penumbra volume edge map (4.1.3), by index into `edges` (`EDGE_INDEX_FORMAT` in pvm/mod.rs).
 @group(0) @binding(4) var edge_index: texture_2d_array<u32>;
 struct EdgePoints {
     h0: vec4<f32>,
