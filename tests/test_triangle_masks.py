@@ -141,12 +141,14 @@ def test_binning_drops_no_triangle_and_culls(renderer: penumbra.Renderer) -> Non
         assert e["triangle_pixel_pairs"] <= s["triangles"] * geometry
         # Without lists every workgroup culls every triangle itself (masks.wgsl): the pairs are as few.
         # The lists are filled by atomics, so their order, and with it where a
-        # pixel's full mask stops it early, changes from render to render: the
-        # counts vary by a few pairs (measured: 24842 against 24833 on the
-        # Cornell box, 0.04%), hence the 1% slack.
-        assert s["triangle_pixel_pairs"] <= 1.01 * e["triangle_pixel_pairs"], name
+        # pixel's full mask stops it early, changes from render to render.
+        # Measured over 40 binned renders of each scene: pairs from 0.825x to
+        # 1.015x the unbinned count, pairs past the cone from 0.770x to 1.017x (the Cornell box is the high end;
+        # an earlier 1% slack came from two renders and failed CI at 1.015x).
+        # Hence 3%: a dropped cull would add far more (triangles_binned below).
+        assert s["triangle_pixel_pairs"] <= 1.03 * e["triangle_pixel_pairs"], name
         # The tiles' hull test is tighter than the pairs' cone test, never looser.
-        assert s["pairs_past_cone"] <= 1.01 * e["pairs_past_cone"]
+        assert s["pairs_past_cone"] <= 1.03 * e["pairs_past_cone"]
         assert s["pairs_tested_per_sample"] <= s["pairs_past_cone"] <= s["triangle_pixel_pairs"]
         assert 0 < s["triangles_binned"] < 0.5 * s["triangles"] * s["tiles"] == 0.5 * e["triangles_binned"], name
         assert s["tiles_overflowed"] == 0 and 0 <= s["pixels_ended_early"] <= geometry
