@@ -1,22 +1,20 @@
-//! Soft-shadow methods (SPEC section 4): one type per method behind one
-//! trait, each in its own folder with its WGSL beside it, and the registry
-//! that lists them. Adding a method is its module, its WGSL and one line in
+//! Soft-shadow methods (SPEC section 4), each in its own folder with its
+//! WGSL beside it behind the trait of [`crate::method`], and the registry
+//! that lists them. Adding a method is its folder and one line in
 //! [`REGISTRY`]; the renderer and the pass cache know no method by name.
 
-use std::any::Any;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::sync::Arc;
+use std::any::Any;
 
 use crate::error::{Error, Result};
-use crate::frame::Frame;
-use crate::gpu::pool::{PooledTexture, ResourcePool};
-use crate::pass_cache::CachedPass;
+use crate::method::{entry, Registered};
+use crate::params::{ParamSet, ParamValue};
 
 pub mod adaptive;
 pub mod backprojection;
 pub mod hard;
-pub mod params;
 pub mod pcf;
 pub mod pcss;
 pub mod pvm;
@@ -25,95 +23,6 @@ pub mod raytraced;
 pub mod reference;
 pub mod triangle_masks;
 pub mod wedges;
-
-pub use params::{ParamKind, ParamSet, ParamSpec, ParamValue};
-
-/// What a method's passes leave for the renderer: the visibility image
-/// (visibility-format, the camera's size) that shading reads and readback returns.
-pub struct MethodOutput {
-    pub visibility: PooledTexture,
-}
-
-/// One soft-shadow method.
-///
-/// A method declares its parameters once ([`Method::specs`]), reads them
-/// into its own typed form ([`Method::params`], where rules between
-/// parameters are checked), builds its pipelines once ([`Method::new`], on
-/// its first render) and records all of its passes for one render against
-/// a [`Frame`], returning its visibility; it sets its own stats, counters
-/// and intermediate images on the frame.
-pub trait Method: Send + Sync + Sized + 'static {
-    /// Its name in `render(scene, name)` (SPEC section 4).
-    const NAME: &'static str;
-    /// The paper and sections it implements, for the docs and `penumbra methods`.
-    const PAPER: &'static str;
-    /// Its parameters in typed form.
-    type Params: Send + Sync + 'static;
-
-    /// Every parameter it takes, with type, range, default and a line of docs.
-    fn specs() -> Vec<ParamSpec>;
-
-    /// Typed parameters from a checked set; rules between parameters are
-    /// checked here ([`Error::InvalidParameter`]).
-    fn params(set: &ParamSet) -> Result<Self::Params>;
-
-    /// The passes whose outputs the pass cache may keep for it (the
-    /// G-buffer is always cacheable; the centre shadow map is
-    /// [`crate::passes::shadow_map::CENTRE_MAP`]).
-    fn cached_passes() -> &'static [CachedPass] {
-        &[]
-    }
-
-    /// Builds its pipelines.
-    fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self;
-
-    /// Records every pass of one render.
-    fn record(&self, frame: &mut Frame<'_>, params: &Self::Params) -> Result<MethodOutput>;
-}
-
-/// A built method, its typed parameters erased.
-pub trait DynMethod: Send + Sync {
-    fn record(&self, frame: &mut Frame<'_>, params: &(dyn Any + Send + Sync)) -> Result<MethodOutput>;
-}
-
-impl<M: Method> DynMethod for M {
-    fn record(&self, frame: &mut Frame<'_>, params: &(dyn Any + Send + Sync)) -> Result<MethodOutput> {
-        let params = params
-            .downcast_ref::<M::Params>()
-            .ok_or_else(|| Error::InvalidParameter(format!("parameters given to method '{}' are another method's", M::NAME)))?;
-        Method::record(self, frame, params)
-    }
-}
-
-/// A registry entry: what is known of a method without a GPU, and how to build it.
-pub struct Registered {
-    pub name: &'static str,
-    pub paper: &'static str,
-    pub specs: fn() -> Vec<ParamSpec>,
-    pub cached_passes: fn() -> &'static [CachedPass],
-    parse: fn(&ParamSet) -> Result<Arc<dyn Any + Send + Sync>>,
-    pub(crate) build: fn(&wgpu::Device, &ResourcePool) -> Box<dyn DynMethod>,
-}
-
-fn parse_typed<M: Method>(set: &ParamSet) -> Result<Arc<dyn Any + Send + Sync>> {
-    Ok(Arc::new(M::params(set)?))
-}
-
-fn build<M: Method>(device: &wgpu::Device, pool: &ResourcePool) -> Box<dyn DynMethod> {
-    Box::new(M::new(device, pool))
-}
-
-/// The registry entry of method `M`.
-pub const fn entry<M: Method>() -> Registered {
-    Registered {
-        name: M::NAME,
-        paper: M::PAPER,
-        specs: M::specs,
-        cached_passes: M::cached_passes,
-        parse: parse_typed::<M>,
-        build: build::<M>,
-    }
-}
 
 /// Every implemented method, in the order of SPEC section 4.
 pub static REGISTRY: &[Registered] = &[

@@ -4,7 +4,7 @@
 
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
-use crate::methods::{ParamSet, ParamSpec};
+use crate::params::{ParamSet, ParamSpec};
 
 /// How each percentage-closer tap reads the map.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

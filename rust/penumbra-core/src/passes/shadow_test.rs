@@ -14,7 +14,7 @@
 
 use crate::error::{Error, Result};
 use crate::light_frustum::{LightProjection, ProjectionMode};
-use crate::methods::{ParamSet, ParamSpec};
+use crate::params::{ParamSet, ParamSpec};
 use crate::passes::shadow_map::{LightSpaceUniform, MapDepth};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

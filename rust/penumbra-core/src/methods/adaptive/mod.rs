@@ -37,8 +37,9 @@ use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
 use crate::gpu::PassTimestamps;
 use crate::light_frustum::{light_sample_error, LightProjection, ProjectionMode};
-use crate::methods::reference::{disk_point, scene_axis};
-use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
+use crate::light_sampling::{disk_point, scene_axis};
+use crate::method::{Method, MethodOutput};
+use crate::params::{ParamSet, ParamSpec};
 use crate::passes::samplers::Filter;
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
@@ -678,7 +679,7 @@ mod tests {
 
     #[test]
     fn the_full_grid_is_references_regular_grid() {
-        use crate::methods::reference::{jittered_grid, Strata};
+        use crate::light_sampling::{jittered_grid, Strata};
         for depth in 0..=4u32 {
             let mut tree = Quadtree::new(depth);
             let mut cells = vec![Quadtree::root()];

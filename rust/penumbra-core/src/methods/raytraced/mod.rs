@@ -41,8 +41,9 @@ use crate::frame::Frame;
 use crate::gpu::context::{ray_queries_disabled, RAY_QUERY_ENV};
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
-use crate::methods::reference::{light_samples, scene_sphere_samples, LightSample};
-use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
+use crate::light_sampling::{light_samples, scene_sphere_samples, LightSample};
+use crate::method::{Method, MethodOutput};
+use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
 

@@ -47,8 +47,9 @@ use crate::frame::Frame;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::methods::raytraced::{SampleUniform, DEFAULT_RAY_OFFSET};
-use crate::methods::reference::{scene_sphere_samples, LightSample};
-use crate::methods::{Method, MethodOutput, ParamSet, ParamSpec};
+use crate::light_sampling::{scene_sphere_samples, LightSample};
+use crate::method::{Method, MethodOutput};
+use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shading::VISIBILITY_FORMAT;
 
@@ -328,7 +329,7 @@ impl Method for TriangleMasks {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::reference::sphere_samples;
+    use crate::light_sampling::sphere_samples;
 
     #[test]
     fn sample_words_reorder_the_samples_and_their_balls_hold_them() {
