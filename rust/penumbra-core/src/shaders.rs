@@ -1,7 +1,11 @@
 //! WGSL sources and their composition.
 //!
-//! Every `.wgsl` file of the crate is listed once in [`FILES`] (embedded with
-//! `include_str!`). A file states what it uses of others with `#import`
+//! Every `.wgsl` file under `src/` is in [`FILES`], embedded by the table
+//! `build.rs` writes: no list is kept by hand, and nothing here names a
+//! method. A module builds its pipelines from the WGSL beside it with
+//! [`crate::shader!`] (`shader!("visibility.wgsl")`), as `re_renderer`'s
+//! `include_shader_module!` does, and from shared files with [`compose`]. A
+//! file states what it uses of others with `#import`
 //! lines at its top, naming the file by its path under `src/`:
 //!
 //! ```text
@@ -23,46 +27,14 @@
 //!
 //! A file with an entry point (`@compute`, `@vertex`, `@fragment`) is a
 //! shader a pipeline is built from; `tests/shader_validation.rs` composes
-//! and validates each one with naga, checks that every file on disk is
-//! listed and used, and checks every Rust uniform and storage struct
-//! against naga's layout of its WGSL twin ([`gpu_structs`]).
+//! and validates each one with naga, checks that every file is used, and
+//! checks every Rust uniform and storage struct against naga's layout of its
+//! WGSL twin ([`GpuStruct`]: each module lists its own, `passes::gpu_structs`
+//! and `Method::gpu_structs`).
 
 use std::collections::BTreeSet;
 
-/// Every WGSL file of the crate: its path under `src/` and its text.
-pub const FILES: &[(&str, &str)] = &[
-    ("shaders/common.wgsl", include_str!("shaders/common.wgsl")),
-    ("shaders/light_space.wgsl", include_str!("shaders/light_space.wgsl")),
-    ("shaders/receiver.wgsl", include_str!("shaders/receiver.wgsl")),
-    ("shaders/light_samples.wgsl", include_str!("shaders/light_samples.wgsl")),
-    ("passes/light_view.wgsl", include_str!("passes/light_view.wgsl")),
-    ("passes/shadow_test.wgsl", include_str!("passes/shadow_test.wgsl")),
-    ("passes/pcf_taps.wgsl", include_str!("passes/pcf_taps.wgsl")),
-    ("passes/gbuffer.wgsl", include_str!("passes/gbuffer.wgsl")),
-    ("passes/shadow_map.wgsl", include_str!("passes/shadow_map.wgsl")),
-    ("passes/shading.wgsl", include_str!("passes/shading.wgsl")),
-    ("passes/light_ids.wgsl", include_str!("passes/light_ids.wgsl")),
-    ("methods/hard/visibility.wgsl", include_str!("methods/hard/visibility.wgsl")),
-    ("methods/pcf/visibility.wgsl", include_str!("methods/pcf/visibility.wgsl")),
-    ("methods/pcss/visibility.wgsl", include_str!("methods/pcss/visibility.wgsl")),
-    ("methods/reference/visibility.wgsl", include_str!("methods/reference/visibility.wgsl")),
-    ("methods/adaptive/compare.wgsl", include_str!("methods/adaptive/compare.wgsl")),
-    ("methods/adaptive/evaluate.wgsl", include_str!("methods/adaptive/evaluate.wgsl")),
-    ("methods/raytraced/visibility.wgsl", include_str!("methods/raytraced/visibility.wgsl")),
-    ("methods/pvm/visibility.wgsl", include_str!("methods/pvm/visibility.wgsl")),
-    ("methods/pvm/edge_maps.wgsl", include_str!("methods/pvm/edge_maps.wgsl")),
-    ("methods/pvmf/mask.wgsl", include_str!("methods/pvmf/mask.wgsl")),
-    ("methods/pvmf/estimate.wgsl", include_str!("methods/pvmf/estimate.wgsl")),
-    ("methods/pvmf/blur.wgsl", include_str!("methods/pvmf/blur.wgsl")),
-    ("methods/backprojection/hierarchy.wgsl", include_str!("methods/backprojection/hierarchy.wgsl")),
-    ("methods/backprojection/contour.wgsl", include_str!("methods/backprojection/contour.wgsl")),
-    ("methods/backprojection/discontinuity.wgsl", include_str!("methods/backprojection/discontinuity.wgsl")),
-    ("methods/backprojection/classify.wgsl", include_str!("methods/backprojection/classify.wgsl")),
-    ("methods/backprojection/visibility.wgsl", include_str!("methods/backprojection/visibility.wgsl")),
-    ("methods/backprojection/pull_push.wgsl", include_str!("methods/backprojection/pull_push.wgsl")),
-    ("methods/wedges/visibility.wgsl", include_str!("methods/wedges/visibility.wgsl")),
-    ("methods/triangle_masks/masks.wgsl", include_str!("methods/triangle_masks/masks.wgsl")),
-];
+include!(concat!(env!("OUT_DIR"), "/wgsl_files.rs"));
 
 const IMPORT: &str = "#import ";
 
@@ -140,6 +112,30 @@ pub fn compose(path: &str) -> String {
     try_compose(path).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// The path under `src/` of WGSL file `name` beside the Rust source file
+/// `file` (as `file!()` gives it: from the workspace or the crate root).
+pub fn beside(file: &str, name: &str) -> String {
+    let file = file.replace('\\', "/");
+    let under_src = match file.rfind("/src/") {
+        Some(i) => &file[i + 5..],
+        None => file.strip_prefix("src/").unwrap_or(&file),
+    };
+    match under_src.rfind('/') {
+        Some(i) => format!("{}/{name}", &under_src[..i]),
+        None => name.to_owned(),
+    }
+}
+
+/// The composed source of the WGSL file `name` beside the calling module's
+/// Rust file: `shader!("visibility.wgsl")` in `methods/pcss/mod.rs` composes
+/// `methods/pcss/visibility.wgsl`.
+#[macro_export]
+macro_rules! shader {
+    ($name:literal) => {
+        $crate::shaders::compose(&$crate::shaders::beside(file!(), $name))
+    };
+}
+
 /// Whether a file holds an entry point: a shader a pipeline is built from.
 pub fn is_entry(path: &str) -> bool {
     text(path).is_ok_and(|t| ["@compute", "@vertex", "@fragment"].iter().any(|e| t.contains(e)))
@@ -179,9 +175,12 @@ pub struct GpuStruct {
     pub fields: Vec<(&'static str, usize)>,
 }
 
+/// A [`GpuStruct`] of a Rust type and the WGSL struct it mirrors:
+/// `gpu_struct!(Rust => "Wgsl" in "path/under/src.wgsl" { field, ... })`.
+#[macro_export]
 macro_rules! gpu_struct {
     ($rust:ty => $wgsl:literal in $file:literal { $($field:ident),* $(,)? }) => {
-        GpuStruct {
+        $crate::shaders::GpuStruct {
             rust: stringify!($rust),
             wgsl: $wgsl,
             file: $file,
@@ -189,41 +188,6 @@ macro_rules! gpu_struct {
             fields: vec![$((stringify!($field), std::mem::offset_of!($rust, $field))),*],
         }
     };
-}
-
-/// Every Rust struct a pass uploads for a shader, with its WGSL twin.
-pub fn gpu_structs() -> Vec<GpuStruct> {
-    use crate::methods::{adaptive, backprojection, pcf, pcss, pvm, pvmf, raytraced, reference, triangle_masks, wedges};
-    use crate::passes::{gbuffer, shading, shadow_map, shadow_test};
-    vec![
-        gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
-        gpu_struct!(shadow_map::ShadowUniforms => "ShadowUniforms" in "passes/light_view.wgsl" { view_proj, view, depth }),
-        gpu_struct!(shadow_test::ShadowTestUniform => "ShadowTest" in "passes/shadow_test.wgsl" { light_space, center, bias, mode }),
-        gpu_struct!(gbuffer::CameraUniforms => "CameraUniforms" in "passes/gbuffer.wgsl" { view_proj, view }),
-        gpu_struct!(shading::ShadingUniforms => "ShadingUniforms" in "passes/shading.wgsl" { light, intensity, ambient, eye }),
-        gpu_struct!(pcf::PcfUniform => "PcfKernel" in "methods/pcf/visibility.wgsl" { kernel, samples, seed, nearest }),
-        gpu_struct!(pcss::PcssUniform => "PcssSampling" in "methods/pcss/visibility.wgsl" { blocker_samples, filter_samples, seed, poisson, cone, horizon }),
-        gpu_struct!(reference::SampleWeightUniform => "SampleWeight" in "methods/reference/visibility.wgsl" { normal, light_center }),
-        gpu_struct!(adaptive::CellCompareUniform => "CellCompare" in "methods/adaptive/compare.wgsl" { tests, cell }),
-        gpu_struct!(pvm::EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" { h0, h1 }),
-        gpu_struct!(raytraced::RaySettingsUniform => "RaySettings" in "methods/raytraced/visibility.wgsl" { light, offset, counts }),
-        gpu_struct!(raytraced::SampleUniform => "LightSample" in "shaders/light_samples.wgsl" { position, normal }),
-        gpu_struct!(triangle_masks::MaskSettingsUniform => "MaskSettings" in "methods/triangle_masks/masks.wgsl" { light, offset, counts, tiles, dispatch }),
-        gpu_struct!(pvmf::SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags, blur_min_width }),
-        gpu_struct!(pvmf::BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),
-        gpu_struct!(backprojection::BackprojectionUniform => "Backprojection" in "methods/backprojection/contour.wgsl" {
-            t, t_k, beta, s_min, eye, flags, levels, max_kernel, pad, level_offset, level_size
-        }),
-        gpu_struct!(backprojection::HierarchyLevelUniform => "HierarchyLevel" in "methods/backprojection/hierarchy.wgsl" {
-            level, size, below_size, offset, below_offset, layers, active_layers, far
-        }),
-        gpu_struct!(backprojection::DiscontinuityUniform => "DiscontinuityStep" in "methods/backprojection/discontinuity.wgsl" { mode, radius, pad0, pad1 }),
-        gpu_struct!(backprojection::PullPushUniform => "PullPushStep" in "methods/backprojection/pull_push.wgsl" {
-            mode, width, height, offset, other_width, other_height, other_offset, pad
-        }),
-        gpu_struct!(wedges::WedgeGpu => "Wedge" in "methods/wedges/visibility.wgsl" { a, b, dir, front, back, hard, left, right, u_left, u_right }),
-        gpu_struct!(wedges::WedgeSettingsUniform => "WedgeSettings" in "methods/wedges/visibility.wgsl" { tiles }),
-    ]
 }
 
 #[cfg(test)]
@@ -242,5 +206,13 @@ mod tests {
         let source = compose("methods/pcss/visibility.wgsl");
         assert!(!source.lines().any(|l| l.trim().starts_with(IMPORT)));
         assert!(try_compose("methods/nope.wgsl").unwrap_err().contains("no WGSL file"));
+    }
+
+    #[test]
+    fn a_module_names_the_wgsl_beside_it() {
+        assert_eq!(beside("rust/penumbra-core/src/methods/pcss/mod.rs", "visibility.wgsl"), "methods/pcss/visibility.wgsl");
+        assert_eq!(beside("src/passes/gbuffer.rs", "gbuffer.wgsl"), "passes/gbuffer.wgsl");
+        assert_eq!(beside("C:\\x\\src\\passes\\shading.rs", "shading.wgsl"), "passes/shading.wgsl");
+        assert_eq!(beside("src/lib.rs", "a.wgsl"), "a.wgsl");
     }
 }

@@ -51,7 +51,7 @@ impl GBuffer {
 impl GBufferPass {
     pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         let layout = pool.layout(device, "gbuffer::layout", &[layout::uniform(0)]);
-        let module = crate::shaders::module(device, "gbuffer::shader", crate::shaders::compose("passes/gbuffer.wgsl"));
+        let module = crate::shaders::module(device, "gbuffer::shader", crate::shader!("gbuffer.wgsl"));
         let buffers = [Some(super::corner_layout(&super::CORNER_ATTRIBUTES))];
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("gbuffer::pipeline"),

@@ -26,3 +26,16 @@ pub fn corner_layout(attributes: &[wgpu::VertexAttribute]) -> wgpu::VertexBuffer
 pub fn mat4(m: glam::Mat4) -> [[f32; 4]; 4] {
     m.to_cols_array_2d()
 }
+
+/// The Rust structs the shared passes and shaders upload, with their WGSL
+/// twins (the methods list theirs: `Method::gpu_structs`).
+pub fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+    vec![
+        crate::gpu_struct!(crate::light_sampling::SampleUniform => "LightSample" in "shaders/light_samples.wgsl" { position, normal }),
+        crate::gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
+        crate::gpu_struct!(shadow_map::ShadowUniforms => "ShadowUniforms" in "passes/light_view.wgsl" { view_proj, view, depth }),
+        crate::gpu_struct!(shadow_test::ShadowTestUniform => "ShadowTest" in "passes/shadow_test.wgsl" { light_space, center, bias, mode }),
+        crate::gpu_struct!(gbuffer::CameraUniforms => "CameraUniforms" in "passes/gbuffer.wgsl" { view_proj, view }),
+        crate::gpu_struct!(shading::ShadingUniforms => "ShadingUniforms" in "passes/shading.wgsl" { light, intensity, ambient, eye }),
+    ]
+}

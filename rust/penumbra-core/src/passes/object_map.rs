@@ -46,7 +46,7 @@ pub fn pass(device: &wgpu::Device, pool: &ResourcePool) -> VolumePass {
         device,
         pool,
         "object_map",
-        crate::shaders::compose("passes/light_ids.wgsl"),
+        crate::shader!("light_ids.wgsl"),
         ("vs_main", "fs_main"),
         &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
         &[FORMAT],

@@ -28,7 +28,7 @@ impl ShadingPass {
             device,
             pool,
             "shading::pass",
-            crate::shaders::compose("passes/shading.wgsl"),
+            crate::shader!("shading.wgsl"),
             &[layout::float_texture, layout::storage_buffer, layout::parameters, |b| layout::storage_texture(b, RADIANCE_FORMAT)],
             &["main"],
         );

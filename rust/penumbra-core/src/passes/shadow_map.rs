@@ -52,7 +52,7 @@ pub struct ShadowMapPass {
 impl ShadowMapPass {
     pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         let layout = pool.layout(device, "shadow_map::layout", &[layout::uniform(0)]);
-        let module = crate::shaders::module(device, "shadow_map::shader", crate::shaders::compose("passes/shadow_map.wgsl"));
+        let module = crate::shaders::module(device, "shadow_map::shader", crate::shader!("shadow_map.wgsl"));
         let pipeline_layout = layout::pipeline_layout(device, "shadow_map::pipeline_layout", &layout);
         let position_only = [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }];
         let positions = wgpu::VertexBufferLayout { array_stride: 12, step_mode: wgpu::VertexStepMode::Vertex, attributes: &position_only };

@@ -1,6 +1,6 @@
 // Light samples of `reference`'s sphere sampling as the methods that test
 // them one by one upload them (`raytraced`, `triangle_masks`; Rust twin:
-// methods/raytraced/mod.rs, SampleUniform), and their weight per receiver.
+// light_sampling.rs, SampleUniform), and their weight per receiver.
 
 struct LightSample {
     // xyz: the point on the light; w: its weight (methods/reference/mod.rs, LightSample).

@@ -347,6 +347,12 @@ impl Method for AdaptiveShadows {
     const PAPER: &'static str = "adaptive light-source sampling (Schwarzler et al. 2013, 3.2-3.4)";
     type Params = AdaptiveParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(CellCompareUniform => "CellCompare" in "methods/adaptive/compare.wgsl" { tests, cell }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         let mut specs: Vec<ParamSpec> = ShadowMapSettings::specs("slope")
             .into_iter()
@@ -425,7 +431,7 @@ impl Method for AdaptiveShadows {
             device,
             pool,
             "adaptive::compare",
-            crate::shaders::compose("methods/adaptive/compare.wgsl"),
+            crate::shader!("compare.wgsl"),
             &[
                 layout::depth_array,
                 layout::depth_array,
@@ -443,7 +449,7 @@ impl Method for AdaptiveShadows {
             device,
             pool,
             "adaptive::evaluate",
-            crate::shaders::compose("methods/adaptive/evaluate.wgsl"),
+            crate::shader!("evaluate.wgsl"),
             &[
                 layout::depth_array,
                 layout::parameters,

@@ -227,6 +227,15 @@ impl Method for SoftShadowBackprojection {
         min/max shadow-map hierarchy, marching-squares contours, radial area integration, light- and screen-space multi-resolution";
     type Params = BackprojectionParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(BackprojectionUniform => "Backprojection" in "methods/backprojection/contour.wgsl" { t, t_k, beta, s_min, eye, flags, levels, max_kernel, pad, level_offset, level_size }),
+            crate::gpu_struct!(HierarchyLevelUniform => "HierarchyLevel" in "methods/backprojection/hierarchy.wgsl" { level, size, below_size, offset, below_offset, layers, active_layers, far }),
+            crate::gpu_struct!(DiscontinuityUniform => "DiscontinuityStep" in "methods/backprojection/discontinuity.wgsl" { mode, radius, pad0, pad1 }),
+            crate::gpu_struct!(PullPushUniform => "PullPushStep" in "methods/backprojection/pull_push.wgsl" { mode, width, height, offset, other_width, other_height, other_offset, pad }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         // The paper's maps are 1k x 1k (section 7.1: the hierarchy of a 1k x 1k
         // map in under 1 ms); its reference averages 2k x 2k maps.
@@ -270,7 +279,7 @@ impl Method for SoftShadowBackprojection {
         let module = crate::shaders::module(
             device,
             "backprojection::hierarchy_shader",
-            crate::shaders::compose("methods/backprojection/hierarchy.wgsl"),
+            crate::shader!("hierarchy.wgsl"),
         );
         let hierarchy = layout::compute_pipeline_entry(device, "backprojection::hierarchy_pipeline", &module, &hierarchy_layout, "main");
         let storage = |b| layout::storage_texture(b, VISIBILITY_FORMAT);
@@ -278,7 +287,7 @@ impl Method for SoftShadowBackprojection {
             device,
             pool,
             "backprojection::discontinuity_pass",
-            crate::shaders::compose("methods/backprojection/discontinuity.wgsl"),
+            crate::shader!("discontinuity.wgsl"),
             &[layout::float_texture, layout::parameters, storage],
             &["main"],
         );
@@ -286,7 +295,7 @@ impl Method for SoftShadowBackprojection {
             device,
             pool,
             "backprojection::classify_pass",
-            crate::shaders::compose("methods/backprojection/classify.wgsl"),
+            crate::shader!("classify.wgsl"),
             &[
                 layout::depth_array,
                 layout::storage_buffer,
@@ -308,7 +317,7 @@ impl Method for SoftShadowBackprojection {
             device,
             pool,
             "backprojection::visibility_pass",
-            crate::shaders::compose("methods/backprojection/visibility.wgsl"),
+            crate::shader!("visibility.wgsl"),
             &[
                 layout::depth_array,
                 layout::storage_buffer,
@@ -336,7 +345,7 @@ impl Method for SoftShadowBackprojection {
         let module = crate::shaders::module(
             device,
             "backprojection::pull_push_shader",
-            crate::shaders::compose("methods/backprojection/pull_push.wgsl"),
+            crate::shader!("pull_push.wgsl"),
         );
         let pull_push = layout::compute_pipeline_entry(device, "backprojection::pull_push_pipeline", &module, &pull_push_layout, "main");
         Self { hierarchy_layout, hierarchy, discontinuity, classify, visibility, pull_push_layout, pull_push, object_pass: object_map::pass(device, pool) }

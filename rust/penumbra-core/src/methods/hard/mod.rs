@@ -42,7 +42,7 @@ impl Method for HardShadow {
             device,
             pool,
             "hard::visibility_pass",
-            crate::shaders::compose("methods/hard/visibility.wgsl"),
+            crate::shader!("visibility.wgsl"),
             &[layout::depth_array, layout::parameters, |b| layout::storage_texture(b, VISIBILITY_FORMAT)],
             &["main"],
         );

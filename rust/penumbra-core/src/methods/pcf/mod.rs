@@ -53,6 +53,12 @@ impl Method for PercentageCloserFiltering {
     const PAPER: &'static str = "percentage-closer filtering (Reeves et al. 1987; Cournia 3.4), fixed kernel";
     type Params = PcfParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(PcfUniform => "PcfKernel" in "methods/pcf/visibility.wgsl" { kernel, samples, seed, nearest }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         let mut specs = ShadowMapSettings::specs("slope");
         specs.extend([
@@ -83,7 +89,7 @@ impl Method for PercentageCloserFiltering {
             device,
             pool,
             "pcf::visibility_pass",
-            crate::shaders::compose("methods/pcf/visibility.wgsl"),
+            crate::shader!("visibility.wgsl"),
             &[
                 layout::depth_array,
                 layout::comparison_sampler,

@@ -101,6 +101,12 @@ impl Method for PercentageCloserSoftShadows {
     const PAPER: &'static str = "percentage-closer soft shadows (Fernando 2005): blocker search, penumbra estimate, variable PCF";
     type Params = PcssParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(PcssUniform => "PcssSampling" in "methods/pcss/visibility.wgsl" { blocker_samples, filter_samples, seed, poisson, cone, horizon }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         let mut specs = ShadowMapSettings::specs("slope");
         specs.extend([
@@ -157,7 +163,7 @@ impl Method for PercentageCloserSoftShadows {
             device,
             pool,
             "pcss::visibility_pass",
-            crate::shaders::compose("methods/pcss/visibility.wgsl"),
+            crate::shader!("visibility.wgsl"),
             &[
                 layout::depth_array,
                 layout::comparison_sampler,
@@ -224,7 +230,7 @@ impl Method for PercentageCloserSoftShadows {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::ParamValue;
+    use crate::params::ParamValue;
     use std::collections::BTreeMap;
 
     /// The Poisson-disk set as the shader holds it.

@@ -125,6 +125,12 @@ impl Method for PenumbraVolumeMaps {
     const PAPER: &'static str = "penumbra volume maps (Cournia ch. 4)";
     type Params = PvmParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" { h0, h1 }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         let mut specs = ShadowMapSettings::specs("slope");
         specs.extend([
@@ -172,7 +178,7 @@ impl Method for PenumbraVolumeMaps {
             device,
             pool,
             "pvm::visibility_pass",
-            crate::shaders::compose("methods/pvm/visibility.wgsl"),
+            crate::shader!("visibility.wgsl"),
             &[
                 layout::depth_array,
                 layout::depth_array,
@@ -193,7 +199,7 @@ impl Method for PenumbraVolumeMaps {
             &[uint_array(0), layout::parameters(1), storage_array(2, EDGE_POINT_FORMAT), storage_array(3, EDGE_POINT_FORMAT)],
         );
         let edge_maps_pipeline =
-            layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shaders::compose("methods/pvm/edge_maps.wgsl"), &edge_maps_layout);
+            layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shader!("edge_maps.wgsl"), &edge_maps_layout);
         Self { volume_pass, object_pass: object_map::pass(device, pool), visibility, edge_maps_pipeline, edge_maps_layout }
     }
 

@@ -183,6 +183,13 @@ impl Method for PenumbraVolumeMaskFiltering {
     const PAPER: &'static str = "penumbra volume mask filtering (Cournia ch. 5)";
     type Params = PvmfParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags, blur_min_width }),
+            crate::gpu_struct!(BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         // Departure from 5.5 (second-depth maps): `slope`, the default of
         // `hard`. A closed caster thinner than the depth a texel spans along
@@ -256,7 +263,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             device,
             pool,
             "pvmf::mask_pass",
-            crate::shaders::compose("methods/pvmf/mask.wgsl"),
+            crate::shader!("mask.wgsl"),
             ("vs_mask", "fs_mask"),
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32],
             &[DISTANCE_FORMAT],
@@ -266,7 +273,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             device,
             pool,
             "pvmf::estimate_pass",
-            crate::shaders::compose("methods/pvmf/estimate.wgsl"),
+            crate::shader!("estimate.wgsl"),
             &[
                 layout::depth_array,
                 layout::depth_array,
@@ -287,7 +294,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             device,
             pool,
             "pvmf::blur_pass",
-            crate::shaders::compose("methods/pvmf/blur.wgsl"),
+            crate::shader!("blur.wgsl"),
             &[layout::float_texture, layout::float_texture, layout::parameters, storage, layout::storage_buffer_rw],
             &["main"],
         );

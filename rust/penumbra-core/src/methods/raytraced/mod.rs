@@ -41,7 +41,7 @@ use crate::frame::Frame;
 use crate::gpu::context::{ray_queries_disabled, RAY_QUERY_ENV};
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
-use crate::light_sampling::{light_samples, scene_sphere_samples, LightSample};
+use crate::light_sampling::{light_samples, scene_sphere_samples, SampleUniform, DEFAULT_RAY_OFFSET};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
@@ -60,13 +60,6 @@ pub struct RaytracedParams {
     pub ray_offset: f64,
 }
 
-/// The default `ray_offset`. `benchmarks/raytraced_offsets.py` (point light
-/// against CPU ray casting, `hard`'s bias scenes and five real meshes at
-/// 128x128): no acne from 1e-6 up, one pixel (of spot) at 1e-7, hundreds at
-/// 0; light leaks at 1e-3 (3 pixels of the bunny). The default keeps a
-/// factor of 100 from acne and of 100 from leaks.
-pub const DEFAULT_RAY_OFFSET: f64 = 1e-5;
-
 /// Layout of `RaySettings` in `methods/raytraced/visibility.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -77,27 +70,6 @@ pub struct RaySettingsUniform {
     pub(crate) offset: [f32; 4],
     /// Samples in the full set, points in the coarse set, the classification's radius, unused.
     pub(crate) counts: [u32; 4],
-}
-
-/// Layout of `LightSample` in `methods/raytraced/visibility.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct SampleUniform {
-    /// The point on the light (xyz) and its weight (w).
-    pub(crate) position: [f32; 4],
-    /// The sphere's outward unit normal there (xyz); w = 1 for solid-angle weights, 0 for equal weights.
-    pub(crate) normal: [f32; 4],
-}
-
-impl From<&LightSample> for SampleUniform {
-    fn from(s: &LightSample) -> Self {
-        let p = s.position.as_vec3();
-        let n = s.normal.unwrap_or(DVec3::ZERO).as_vec3();
-        Self {
-            position: [p.x, p.y, p.z, s.weight as f32],
-            normal: [n.x, n.y, n.z, if s.normal.is_some() { 1.0 } else { 0.0 }],
-        }
-    }
 }
 
 /// Counters read back into stats: pixels that took the full sample set, and
@@ -145,6 +117,12 @@ impl Method for RaytracedShadows {
         with reference's sphere sampling";
     type Params = RaytracedParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(RaySettingsUniform => "RaySettings" in "methods/raytraced/visibility.wgsl" { light, offset, counts }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         vec![
             ParamSpec::int("n_samples", 256, 1, 65536, "shadow rays per pixel, one per light sample of reference's sphere sampling (rounded up to full stratified grids)"),
@@ -186,7 +164,7 @@ impl Method for RaytracedShadows {
                 device,
                 pool,
                 "raytraced::pass",
-                crate::shaders::compose("methods/raytraced/visibility.wgsl"),
+                crate::shader!("visibility.wgsl"),
                 &[
                     acceleration_structure,
                     layout::parameters,
@@ -292,11 +270,11 @@ mod tests {
 
     #[test]
     fn adaptive_mode_needs_fewer_first_rays_than_the_full_count() {
-        let parse = |pairs: &[(&str, crate::methods::ParamValue)]| {
+        let parse = |pairs: &[(&str, crate::params::ParamValue)]| {
             let given: BTreeMap<String, _> = pairs.iter().map(|(k, v)| ((*k).to_owned(), v.clone())).collect();
             MethodConfig::parse("raytraced", &given)
         };
-        use crate::methods::ParamValue::{Bool, Int};
+        use crate::params::ParamValue::{Bool, Int};
         assert!(parse(&[("adaptive", Bool(true))]).is_ok());
         let e = parse(&[("adaptive", Bool(true)), ("n_samples", Int(16))]).unwrap_err().to_string();
         assert!(e.contains("'adaptive_samples'") && e.contains("below n_samples (16)"), "{e}");

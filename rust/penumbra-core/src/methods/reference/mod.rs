@@ -100,6 +100,12 @@ impl Method for ReferenceShadows {
     const PAPER: &'static str = "accumulation of hard shadows from n light samples (Herf 3.4, 4.2; Schwarzler et al. Eq. 1-2)";
     type Params = ReferenceParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(SampleWeightUniform => "SampleWeight" in "methods/reference/visibility.wgsl" { normal, light_center }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         let mut specs = ShadowMapSettings::specs("slope");
         specs.extend([
@@ -131,7 +137,7 @@ impl Method for ReferenceShadows {
             device,
             pool,
             "reference::pass",
-            crate::shaders::compose("methods/reference/visibility.wgsl"),
+            crate::shader!("visibility.wgsl"),
             &[
                 layout::depth_array,
                 layout::parameters,

@@ -46,8 +46,7 @@ use crate::error::Result;
 use crate::frame::Frame;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
-use crate::methods::raytraced::{SampleUniform, DEFAULT_RAY_OFFSET};
-use crate::light_sampling::{scene_sphere_samples, LightSample};
+use crate::light_sampling::{scene_sphere_samples, LightSample, SampleUniform, DEFAULT_RAY_OFFSET};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
@@ -164,6 +163,12 @@ impl Method for TriangleMasks {
         exact at reference's sphere samples, without ray queries";
     type Params = TriangleMaskParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(MaskSettingsUniform => "MaskSettings" in "methods/triangle_masks/masks.wgsl" { light, offset, counts, tiles, dispatch }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         vec![
             ParamSpec::int("n_samples", 256, 1, 4096, "light samples of reference's sphere sampling, one mask bit each (rounded up to full stratified grids)"),
@@ -193,7 +198,7 @@ impl Method for TriangleMasks {
             device,
             pool,
             "triangle_masks::pass",
-            crate::shaders::compose("methods/triangle_masks/masks.wgsl"),
+            crate::shader!("masks.wgsl"),
             &[
                 layout::parameters,
                 layout::storage_buffer,

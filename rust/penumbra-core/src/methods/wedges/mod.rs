@@ -143,6 +143,13 @@ impl Method for PenumbraWedges {
     const PAPER: &'static str = "penumbra wedges (Akenine-Möller & Assarsson 2002, 4.1-4.2; per-pixel coverage of Assarsson & Akenine-Möller 2003)";
     type Params = WedgesParams;
 
+    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
+        vec![
+            crate::gpu_struct!(WedgeGpu => "Wedge" in "methods/wedges/visibility.wgsl" { a, b, dir, front, back, hard, left, right, u_left, u_right }),
+            crate::gpu_struct!(WedgeSettingsUniform => "WedgeSettings" in "methods/wedges/visibility.wgsl" { tiles }),
+        ]
+    }
+
     fn specs() -> Vec<ParamSpec> {
         let mut specs = ShadowMapSettings::specs("slope");
         specs.extend([
@@ -222,7 +229,7 @@ impl Method for PenumbraWedges {
             device,
             pool,
             "wedges::visibility_pass",
-            crate::shaders::compose("methods/wedges/visibility.wgsl"),
+            crate::shader!("visibility.wgsl"),
             &[
                 layout::depth_array,
                 layout::parameters,
