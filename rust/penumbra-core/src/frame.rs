@@ -1,9 +1,11 @@
 //! The frame: everything one render's passes read and leave behind, handed
 //! by the renderer to the method it renders with.
 //!
-//! [`FrameContext`] is fixed before the method records: device, scene,
-//! camera, the light and its shadow-map frustum, the G-buffer, and the
-//! passes every method may share ([`SharedPasses`]). [`Frame`] adds what a
+//! [`FrameContext`] is fixed before the method records: device, pool,
+//! scene, camera, the light and its shadow-map projections, the G-buffer's
+//! images, the silhouette cache and the resource helpers. It names no pass:
+//! the passes (`passes/`) read it, and a pass several methods record is
+//! shared through the pool (`ResourcePool::shared`). [`Frame`] adds what a
 //! method records into: named passes (timed by the profiler), the pass
 //! cache ([`Frame::cached`]), pooled resources that stay in use until the
 //! frame's work is done, stats, counters read back into stats, and
@@ -17,25 +19,13 @@ use std::sync::Arc;
 use glam::{DVec3, Vec3};
 
 use crate::error::{Error, Result};
+use crate::gpu::formats;
 use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
 use crate::gpu::{PassTimestamps, Profiler};
 use crate::light_frustum::{LightProjection, ProjectionMode};
 use crate::pass_cache::{Entry, PassCache, PassKey};
-use crate::passes::gbuffer::GBuffer;
-use crate::passes::samplers::ComparisonSamplers;
-use crate::passes::shadow_map::ShadowMapPass;
 use crate::scene::{Camera, PreparedScene, Scene};
 use crate::silhouettes::SilhouetteCache;
-
-/// Passes and objects built once by the renderer and shared by the methods.
-pub struct SharedPasses {
-    /// Depth maps from a point (the light centre, or a light sample).
-    pub shadow_map: ShadowMapPass,
-    /// Both comparison samplers of the percentage-closer methods.
-    pub samplers: ComparisonSamplers,
-    /// Topology and silhouettes, cached by mesh content and light centre.
-    pub silhouettes: SilhouetteCache,
-}
 
 /// The sphere light, in the precisions the passes use.
 #[derive(Debug, Clone, Copy)]
@@ -73,6 +63,30 @@ impl Intermediate {
     }
 }
 
+/// The camera's G-buffer images of one frame, in pooled textures (the
+/// G-buffer pass, `passes::gbuffer`, draws them): world position with view
+/// depth, and shading normal with mesh index.
+pub struct GBuffer {
+    pub position: PooledTexture,
+    pub normal: PooledTexture,
+    pub(crate) depth: PooledTexture,
+    pub size: (u32, u32),
+}
+
+impl GBuffer {
+    pub fn new(device: &wgpu::Device, pool: &ResourcePool, size: (u32, u32)) -> Self {
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        Self {
+            position: pool.texture(device, "gbuffer::position", TextureKey::plain(size, formats::POSITION, usage)),
+            normal: pool.texture(device, "gbuffer::normal", TextureKey::plain(size, formats::NORMAL, usage)),
+            depth: pool.texture(device, "gbuffer::depth", TextureKey::plain(size, formats::DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT)),
+            size,
+        }
+    }
+}
+
 /// A scene's triangles on the GPU, indexed (see [`crate::scene::PreparedScene`]).
 pub struct GeometryBuffers {
     pub surface_vertices: PooledBuffer,
@@ -85,7 +99,8 @@ pub struct GeometryBuffers {
 pub struct FrameContext<'r> {
     pub device: &'r wgpu::Device,
     pub queue: &'r wgpu::Queue,
-    pub shared: &'r SharedPasses,
+    /// Topology and silhouettes, cached by mesh content and light centre.
+    pub silhouettes: &'r SilhouetteCache,
     pub pool: &'r ResourcePool,
     pub scene: &'r Scene,
     pub prepared: &'r PreparedScene,
@@ -113,7 +128,7 @@ impl<'r> FrameContext<'r> {
     pub(crate) fn new(
         device: &'r wgpu::Device,
         queue: &'r wgpu::Queue,
-        shared: &'r SharedPasses,
+        silhouettes: &'r SilhouetteCache,
         pool: &'r ResourcePool,
         scene: &'r Scene,
         prepared: &'r PreparedScene,
@@ -131,7 +146,7 @@ impl<'r> FrameContext<'r> {
         Self {
             device,
             queue,
-            shared,
+            silhouettes,
             pool,
             scene,
             prepared,
@@ -253,7 +268,7 @@ impl<'r> FrameContext<'r> {
         self.texture(
             label,
             self.size,
-            crate::passes::shading::VISIBILITY_FORMAT,
+            crate::gpu::formats::VISIBILITY,
             wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
         )
     }

@@ -10,7 +10,7 @@ use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::frame::{Frame, FrameContext, SharedPasses};
+use crate::frame::{Frame, FrameContext};
 use crate::gpu::pool::{PoolStats, ResourcePool};
 use crate::gpu::readback::{self, PendingReadback};
 use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
@@ -18,9 +18,11 @@ use crate::method::DynMethod;
 use crate::methods::{MethodConfig, REGISTRY};
 use crate::params::ParamValue;
 use crate::pass_cache::{CachedPass, PassCache, PassKey};
-use crate::passes::gbuffer::{GBuffer, GBufferPass, GBUFFER};
+use crate::frame::GBuffer;
+use crate::passes::gbuffer::{GBufferPass, GBUFFER};
 use crate::passes::samplers::ComparisonSamplers;
-use crate::passes::shading::{ShadingPass, RADIANCE_FORMAT};
+use crate::gpu::formats;
+use crate::passes::shading::ShadingPass;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::scene::{Camera, PreparedScene, Scene};
 use crate::silhouettes::SilhouetteCache;
@@ -127,7 +129,8 @@ pub struct Renderer {
     pool: ResourcePool,
     gbuffer: GBufferPass,
     shading: ShadingPass,
-    shared: SharedPasses,
+    /// Topology and silhouettes, cached by mesh content and light centre.
+    silhouettes: SilhouetteCache,
     /// One per registry entry, built on its first render.
     methods: Vec<OnceLock<Box<dyn DynMethod>>>,
     cache: PassCache,
@@ -149,20 +152,16 @@ impl Renderer {
         let ctx = GpuContext::new()?;
         let pool = ResourcePool::default();
         let device = &ctx.device;
-        let (gbuffer, shading, shared) = ctx.scoped(|| {
-            Ok((
-                GBufferPass::new(device, &pool),
-                ShadingPass::new(device, &pool),
-                SharedPasses {
-                    shadow_map: ShadowMapPass::new(device, &pool),
-                    samplers: ComparisonSamplers::new(device, &pool),
-                    silhouettes: SilhouetteCache::default(),
-                },
-            ))
+        let (gbuffer, shading) = ctx.scoped(|| {
+            // The pool's shared passes, built here so that a device error
+            // surfaces now and no method's first render pays for them.
+            ShadowMapPass::shared(device, &pool);
+            ComparisonSamplers::shared(device, &pool);
+            Ok((GBufferPass::new(device, &pool), ShadingPass::new(device, &pool)))
         })?;
         let methods = REGISTRY.iter().map(|_| OnceLock::new()).collect();
         let cache = PassCache::new(pass_cache, cached_passes());
-        Ok(Self { ctx, use_timestamps, pool, gbuffer, shading, shared, methods, cache })
+        Ok(Self { ctx, use_timestamps, pool, gbuffer, shading, silhouettes: SilhouetteCache::default(), methods, cache })
     }
 
     /// Whether renders reuse cached pass outputs.
@@ -281,7 +280,7 @@ impl Renderer {
         let ctx = FrameContext::new(
             device,
             &self.ctx.queue,
-            &self.shared,
+            &self.silhouettes,
             &self.pool,
             scene,
             prepared,
@@ -317,7 +316,7 @@ impl Renderer {
             let radiance = frame.ctx.texture(
                 "renderer::radiance",
                 size,
-                RADIANCE_FORMAT,
+                formats::RADIANCE,
                 wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
             );
             frame.pass("shading", |ctx, encoder, ts| self.shading.record(ctx, encoder, &output.visibility, &radiance, ts))?;
@@ -458,7 +457,7 @@ impl Renderer {
     }
 }
 
-/// Bytes of one shadow-map face (`shadow_map::FORMAT`, 32-bit depth).
+/// Bytes of one shadow-map face (`gpu::formats::DEPTH`, 32-bit depth).
 const MAP_TEXEL_BYTES: u64 = 4;
 
 fn gib(bytes: u64) -> String {

@@ -1,6 +1,7 @@
 //! GPU plumbing shared by every pass: context, readback, timing.
 
 pub mod context;
+pub mod formats;
 pub mod layout;
 pub mod pool;
 pub mod profiler;

@@ -22,6 +22,7 @@
 //! with the bind groups that name them. [`ResourcePool::clear`] releases
 //! everything free.
 
+use std::any::{Any, TypeId};
 use std::collections::HashMap;
 use std::hash::Hash;
 use std::ops::Deref;
@@ -157,6 +158,9 @@ pub struct ResourcePool {
     textures: Mutex<HashMap<TextureKey, Vec<Slot<PoolTexture>>>>,
     buffers: Mutex<HashMap<BufferKey, Vec<Slot<wgpu::Buffer>>>>,
     bind_groups: Mutex<Vec<CachedBindGroup>>,
+    /// One object per type that several methods build alike (a pass's
+    /// pipelines, samplers): [`Self::shared`].
+    shared: Mutex<HashMap<TypeId, Arc<dyn Any + Send + Sync>>>,
     next_id: AtomicU64,
     clock: AtomicU64,
     /// Free resources kept beyond this many bytes are released after a render.
@@ -190,10 +194,27 @@ impl ResourcePool {
             textures: Mutex::default(),
             buffers: Mutex::default(),
             bind_groups: Mutex::default(),
+            shared: Mutex::default(),
             next_id: AtomicU64::new(1),
             clock: AtomicU64::new(0),
             max_free_bytes,
         }
+    }
+
+    /// The one `T` of this pool, made by `make` the first time it is asked
+    /// for: a pass several methods record (the light's shadow map) or the
+    /// samplers they bind, built once per device and shared, without a list
+    /// of them below the methods. Never released by [`Self::clear`].
+    pub fn shared<T: Any + Send + Sync>(&self, make: impl FnOnce() -> T) -> Arc<T> {
+        let get = |map: &HashMap<TypeId, Arc<dyn Any + Send + Sync>>| map.get(&TypeId::of::<T>()).cloned();
+        let found = get(&self.shared.lock().unwrap_or_else(|e| e.into_inner()));
+        // `make` runs without the lock: it may ask the pool for layouts (or for another shared object).
+        let value = found.unwrap_or_else(|| {
+            let made: Arc<dyn Any + Send + Sync> = Arc::new(make());
+            let mut map = self.shared.lock().unwrap_or_else(|e| e.into_inner());
+            map.entry(TypeId::of::<T>()).or_insert(made).clone()
+        });
+        value.downcast::<T>().unwrap_or_else(|_| unreachable!("the map holds a T under T's TypeId"))
     }
 
     /// A fresh id for a resource owned outside the pool.

@@ -2,17 +2,13 @@
 //! shading normal with mesh index, in two float32 targets.
 
 use crate::frame::FrameContext;
-use crate::gpu::layout;
-use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool, TextureKey};
+use crate::gpu::{formats, layout};
+use crate::gpu::pool::{Binding, Layout, ResourcePool};
 use crate::gpu::PassTimestamps;
 use crate::pass_cache::CachedPass;
 
 /// The G-buffer as the pass cache keeps it: two cameras (or image sizes) alternating.
 pub const GBUFFER: CachedPass = CachedPass { name: "gbuffer", capacity: 2 };
-
-pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -24,28 +20,6 @@ pub struct CameraUniforms {
 pub struct GBufferPass {
     pipeline: wgpu::RenderPipeline,
     layout: Layout,
-}
-
-/// The G-buffer of one frame, in pooled textures.
-pub struct GBuffer {
-    pub position: PooledTexture,
-    pub normal: PooledTexture,
-    depth: PooledTexture,
-    pub size: (u32, u32),
-}
-
-impl GBuffer {
-    pub fn new(device: &wgpu::Device, pool: &ResourcePool, size: (u32, u32)) -> Self {
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC;
-        Self {
-            position: pool.texture(device, "gbuffer::position", TextureKey::plain(size, POSITION_FORMAT, usage)),
-            normal: pool.texture(device, "gbuffer::normal", TextureKey::plain(size, NORMAL_FORMAT, usage)),
-            depth: pool.texture(device, "gbuffer::depth", TextureKey::plain(size, DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT)),
-            size,
-        }
-    }
 }
 
 impl GBufferPass {
@@ -67,13 +41,13 @@ impl GBufferPass {
                 cull_mode: None,
                 ..Default::default()
             },
-            depth_stencil: layout::nearest_depth(DEPTH_FORMAT),
+            depth_stencil: layout::nearest_depth(formats::DEPTH),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                targets: &[Some(POSITION_FORMAT.into()), Some(NORMAL_FORMAT.into())],
+                targets: &[Some(formats::POSITION.into()), Some(formats::NORMAL.into())],
             }),
             multiview_mask: None,
             cache: None,

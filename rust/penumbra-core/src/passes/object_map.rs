@@ -92,7 +92,7 @@ fn record(frame: &mut Frame<'_>, pass: &VolumePass, projection: &LightProjection
     let key = PassKey::new(OBJECT_MAP.name).bytes(&frame.ctx.geometry).projection(projection).u32(map_size).finish();
     frame.cached(OBJECT_MAP.name, key, |frame| {
         frame.pass(OBJECT_MAP.name, |ctx, encoder, ts| -> Result<Arc<ObjectMap>> {
-            let objects = ctx.shared.silhouettes.mesh_objects(ctx.prepared);
+            let objects = ctx.silhouettes.mesh_objects(ctx.prepared);
             let vertices: Vec<ObjectVertex> =
                 ctx.prepared.corners.iter().map(|c| ObjectVertex { position: c.position, object: objects[c.mesh_index as usize] }).collect();
             let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;

@@ -51,6 +51,11 @@ impl ComparisonSamplers {
         }
     }
 
+    /// The pool's one pair (built on first use, shared by every method).
+    pub fn shared(device: &wgpu::Device, pool: &ResourcePool) -> std::sync::Arc<Self> {
+        pool.shared(|| Self::new(device, pool))
+    }
+
     pub fn get(&self, filter: Filter) -> &wgpu::Sampler {
         match filter {
             Filter::Bilinear => &self.bilinear.1,

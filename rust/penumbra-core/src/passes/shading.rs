@@ -3,11 +3,9 @@
 
 use crate::frame::FrameContext;
 use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
-use crate::gpu::{layout, PassTimestamps};
+use crate::gpu::{formats, layout, PassTimestamps};
 use crate::passes::screen::ScreenPass;
 
-pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
-pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -29,7 +27,7 @@ impl ShadingPass {
             pool,
             "shading::pass",
             crate::shader!("shading.wgsl"),
-            &[layout::float_texture, layout::storage_buffer, layout::parameters, |b| layout::storage_texture(b, RADIANCE_FORMAT)],
+            &[layout::float_texture, layout::storage_buffer, layout::parameters, |b| layout::storage_texture(b, formats::RADIANCE)],
             &["main"],
         );
         Self { pass }

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use crate::error::Result;
 use crate::frame::{Frame, FrameContext, Intermediate};
 use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool};
-use crate::gpu::{layout, PassTimestamps};
+use crate::gpu::{formats, layout, PassTimestamps};
 use crate::light_frustum::{LightFrustum, LightProjection};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::shadow_test::ShadowMapSettings;
@@ -19,8 +19,6 @@ use crate::passes::shadow_test::ShadowMapSettings;
 /// The shadow map from the light centre, as the pass cache keeps it (pass 1
 /// of every method but `reference`; see [`centre_map`]).
 pub const CENTRE_MAP: CachedPass = CachedPass { name: "shadow_map", capacity: 3 };
-
-pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MapDepth {
@@ -50,6 +48,12 @@ pub struct ShadowMapPass {
 }
 
 impl ShadowMapPass {
+    /// The pool's one shadow-map pass (its pipelines built on first use),
+    /// which every method that renders depth maps from a light point records.
+    pub fn shared(device: &wgpu::Device, pool: &ResourcePool) -> Arc<Self> {
+        pool.shared(|| Self::new(device, pool))
+    }
+
     pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         let layout = pool.layout(device, "shadow_map::layout", &[layout::uniform(0)]);
         let module = crate::shaders::module(device, "shadow_map::shader", crate::shader!("shadow_map.wgsl"));
@@ -68,7 +72,7 @@ impl ShadowMapPass {
                     buffers: &buffers,
                 },
                 primitive: wgpu::PrimitiveState { cull_mode, ..Default::default() },
-                depth_stencil: layout::nearest_depth(FORMAT),
+                depth_stencil: layout::nearest_depth(formats::DEPTH),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
@@ -96,7 +100,7 @@ impl ShadowMapPass {
             },
             primitive: Default::default(),
             depth_stencil: Some(wgpu::DepthStencilState {
-                format: FORMAT,
+                format: formats::DEPTH,
                 depth_write_enabled: Some(true),
                 depth_compare: Some(wgpu::CompareFunction::Always),
                 stencil: Default::default(),
@@ -127,7 +131,7 @@ impl ShadowMapPass {
             "shadow_map::depth",
             map_size,
             layers,
-            FORMAT,
+            formats::DEPTH,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
         )
     }
@@ -185,8 +189,8 @@ impl ShadowMapPass {
             MapDepth::Midpoint => {
                 let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
                 let size = (map.width(), map.height());
-                let near = ctx.texture("shadow_map::first_depth", size, FORMAT, usage);
-                let far = ctx.texture("shadow_map::second_depth", size, FORMAT, usage);
+                let near = ctx.texture("shadow_map::first_depth", size, formats::DEPTH, usage);
+                let far = ctx.texture("shadow_map::second_depth", size, formats::DEPTH, usage);
                 draw(encoder, &near.view, &self.first_depth, part(first, false));
                 draw(encoder, &far.view, &self.second_depth, None);
                 let bind_group = ctx.pool.bind_group(
@@ -249,7 +253,7 @@ pub fn centre_map(frame: &mut Frame<'_>, settings: &ShadowMapSettings) -> Result
     let map = frame.cached(CENTRE_MAP.name, key, |frame| {
         let map = ShadowMapPass::create_map(&frame.ctx, settings.map_size, projection.layers());
         frame.pass(CENTRE_MAP.name, |ctx, encoder, ts| {
-            ctx.shared.shadow_map.record(ctx, encoder, &map, &projection, map_depth, ts, (true, true))
+            ShadowMapPass::shared(ctx.device, ctx.pool).record(ctx, encoder, &map, &projection, map_depth, ts, (true, true))
         })?;
         rendered = 1;
         Ok(map)

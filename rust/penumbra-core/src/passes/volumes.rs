@@ -8,7 +8,8 @@ use crate::frame::FrameContext;
 use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool};
 use crate::gpu::{layout, PassTimestamps};
 use crate::light_frustum::{LightFrustum, LightProjection};
-use crate::passes::shadow_map::{shadow_uniforms, uniform_buffer, ShadowMapPass, FORMAT};
+use crate::gpu::formats;
+use crate::passes::shadow_map::{shadow_uniforms, uniform_buffer, ShadowMapPass};
 
 pub struct VolumePass {
     name: &'static str,
@@ -44,7 +45,7 @@ impl VolumePass {
             vertex: wgpu::VertexState { module: &module, entry_point: Some(vs), compilation_options: Default::default(), buffers: &buffers },
             // Both sides of every quadrilateral: the volume nearest the light, whichever way it faces.
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: layout::nearest_depth(FORMAT),
+            depth_stencil: layout::nearest_depth(formats::DEPTH),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState { module: &module, entry_point: Some(fs), compilation_options: Default::default(), targets: &targets }),
             multiview_mask: None,

@@ -40,9 +40,9 @@ use crate::light_frustum::{light_sample_error, LightProjection, ProjectionMode};
 use crate::light_sampling::{disk_point, scene_axis};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
-use crate::passes::samplers::Filter;
+use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 use crate::passes::shadow_map::{self, ShadowMapPass};
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 
@@ -321,6 +321,7 @@ impl AdaptiveShadows {
         let mut parts = Parts { ts, next: 0, total: maps.len() + 1 };
         let mut last_group = None;
         for (i, (map, _)) in maps.iter().enumerate() {
+            let samplers = ComparisonSamplers::shared(ctx.device, ctx.pool);
             let group = self.evaluate.bind_group(
                 ctx,
                 &[
@@ -328,7 +329,7 @@ impl AdaptiveShadows {
                     Binding::BufferRange(&tests, (i * stride) as u64, size as u64),
                     Binding::Buffer(&accumulated),
                     Binding::Texture(visibility),
-                    ctx.shared.samplers.binding(Filter::Bilinear),
+                    samplers.binding(Filter::Bilinear),
                 ],
             );
             let writes = parts.compute();
@@ -441,7 +442,7 @@ impl Method for AdaptiveShadows {
                 layout::storage_buffer_rw,
                 layout::storage_buffer_rw,
                 layout::storage_buffer_rw,
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
             ],
             &["compare", "ring", "image"],
         );
@@ -454,7 +455,7 @@ impl Method for AdaptiveShadows {
                 layout::depth_array,
                 layout::parameters,
                 layout::storage_buffer_rw,
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
                 layout::comparison_sampler,
             ],
             &["accumulate", "resolve"],
@@ -517,7 +518,7 @@ impl Method for AdaptiveShadows {
                 for (position, projection) in new_points.iter().zip(projections) {
                     let texture = ShadowMapPass::create_map(ctx, params.shadow.map_size, projection.layers());
                     let (first, last) = parts.next();
-                    ctx.shared.shadow_map.record(ctx, encoder, &texture, &projection, depth, ts, (first, last));
+                    ShadowMapPass::shared(ctx.device, ctx.pool).record(ctx, encoder, &texture, &projection, depth, ts, (first, last));
                     let p = position.as_vec3();
                     let test = params.shadow.uniform(&projection, p.to_array(), 0.0, flags);
                     new_maps.push(LightMap { texture, test, projection });
@@ -550,7 +551,7 @@ impl Method for AdaptiveShadows {
                 let level_images = ctx.counters("adaptive::level_images", if want_images { 2 * texels } else { 1 }, encoder);
                 let image_usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
                 let images: Vec<PooledTexture> = (0..if want_images { 2 } else { 1 })
-                    .map(|_| ctx.texture("adaptive::comparison_image", target, VISIBILITY_FORMAT, image_usage))
+                    .map(|_| ctx.texture("adaptive::comparison_image", target, formats::VISIBILITY, image_usage))
                     .collect();
                 let group = |slot: usize, corners: [usize; 4], image: &PooledTexture| {
                     let [a, b, c, d] = corners.map(|i| &map_of(i).texture);

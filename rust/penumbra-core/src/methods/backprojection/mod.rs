@@ -36,7 +36,7 @@ use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec, ParamValue};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::volumes::VolumePass;
 use crate::passes::shadow_map::{self, CENTRE_MAP};
@@ -282,7 +282,7 @@ impl Method for SoftShadowBackprojection {
             crate::shader!("hierarchy.wgsl"),
         );
         let hierarchy = layout::compute_pipeline_entry(device, "backprojection::hierarchy_pipeline", &module, &hierarchy_layout, "main");
-        let storage = |b| layout::storage_texture(b, VISIBILITY_FORMAT);
+        let storage = |b| layout::storage_texture(b, formats::VISIBILITY);
         let discontinuity = ScreenPass::new(
             device,
             pool,
@@ -339,7 +339,7 @@ impl Method for SoftShadowBackprojection {
                 layout::float_texture(1),
                 layout::parameters(2),
                 layout::storage_buffer_rw(3),
-                layout::storage_texture(4, VISIBILITY_FORMAT),
+                layout::storage_texture(4, formats::VISIBILITY),
             ],
         );
         let module = crate::shaders::module(
@@ -397,7 +397,7 @@ impl Method for SoftShadowBackprojection {
                 }
                 None => {
                     // Not read without 5.2; the binding still needs an image.
-                    unused = ctx.texture("backprojection::no_discontinuities", (1, 1), VISIBILITY_FORMAT, wgpu::TextureUsages::TEXTURE_BINDING);
+                    unused = ctx.texture("backprojection::no_discontinuities", (1, 1), formats::VISIBILITY, wgpu::TextureUsages::TEXTURE_BINDING);
                     &unused
                 }
             };

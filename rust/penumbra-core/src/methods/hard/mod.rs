@@ -9,7 +9,7 @@ use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 
@@ -43,7 +43,7 @@ impl Method for HardShadow {
             pool,
             "hard::visibility_pass",
             crate::shader!("visibility.wgsl"),
-            &[layout::depth_array, layout::parameters, |b| layout::storage_texture(b, VISIBILITY_FORMAT)],
+            &[layout::depth_array, layout::parameters, |b| layout::storage_texture(b, formats::VISIBILITY)],
             &["main"],
         );
         Self { visibility }

@@ -17,9 +17,9 @@ use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
-use crate::passes::samplers::Filter;
+use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 
@@ -95,7 +95,7 @@ impl Method for PercentageCloserFiltering {
                 layout::comparison_sampler,
                 layout::parameters,
                 layout::parameters,
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
             ],
             &["main"],
         );
@@ -115,9 +115,10 @@ impl Method for PercentageCloserFiltering {
                 nearest: u32::from(params.filter == Filter::Nearest),
             };
             let kernel = ctx.parameters("pcf::kernel_uniforms", &kernel);
+            let samplers = ComparisonSamplers::shared(ctx.device, ctx.pool);
             let resources = [
                 Binding::Texture(&map),
-                ctx.shared.samplers.binding(params.filter),
+                samplers.binding(params.filter),
                 Binding::Buffer(&test),
                 Binding::Buffer(&kernel),
                 Binding::Texture(&visibility),

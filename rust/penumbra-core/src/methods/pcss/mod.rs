@@ -21,9 +21,9 @@ use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
-use crate::passes::samplers::Filter;
+use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::volumes::VolumePass;
@@ -169,9 +169,9 @@ impl Method for PercentageCloserSoftShadows {
                 layout::comparison_sampler,
                 layout::parameters,
                 layout::parameters,
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
                 layout::storage_buffer_rw,
                 object_map::map_binding,
                 layout::parameters,
@@ -205,9 +205,10 @@ impl Method for PercentageCloserSoftShadows {
                 horizon: u32::from(params.horizon),
             };
             let sampling = ctx.parameters("pcss::sampling_uniforms", &sampling);
+            let samplers = ComparisonSamplers::shared(ctx.device, ctx.pool);
             let resources = [
                 Binding::Texture(&map),
-                ctx.shared.samplers.binding(params.filter),
+                samplers.binding(params.filter),
                 Binding::Buffer(&test),
                 Binding::Buffer(&sampling),
                 Binding::Texture(&visibility),

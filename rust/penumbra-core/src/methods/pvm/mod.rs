@@ -27,7 +27,7 @@ use crate::light_frustum::LightProjection;
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 use crate::passes::screen::ScreenPass;
 use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::shadow_map::{self, CENTRE_MAP};
@@ -185,8 +185,8 @@ impl Method for PenumbraVolumeMaps {
                 uint_array,
                 layout::parameters,
                 layout::parameters,
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
                 layout::storage_buffer_rw,
                 object_map::map_binding,
                 layout::parameters,
@@ -276,7 +276,7 @@ impl PenumbraVolumeMaps {
             let (mut cache_hits, mut geometry) = (0, VolumeGeometry::default());
             // A point light has no penumbra: skip the volumes entirely.
             if r > 0.0 {
-                let silhouette = ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
+                let silhouette = ctx.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
                 cache_hits = silhouette.cache_hits;
                 // Beyond the far plane of every face (at most sqrt(3) far from the light).
                 let reach = 4.0 * projection.far() as f64 + 4.0 * r;

@@ -32,9 +32,9 @@ use crate::light_frustum::LightProjection;
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
-use crate::passes::samplers::Filter;
+use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
@@ -268,7 +268,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32],
             &[DISTANCE_FORMAT],
         );
-        let storage = |b| layout::storage_texture(b, VISIBILITY_FORMAT);
+        let storage = |b| layout::storage_texture(b, formats::VISIBILITY);
         let estimate = ScreenPass::new(
             device,
             pool,
@@ -338,11 +338,12 @@ impl Method for PenumbraVolumeMaskFiltering {
                 let (test, settings) = estimate_uniforms(params, &projection, (light.center_f32, light.radius_f32));
                 let test = ctx.parameters("pvmf::test_uniforms", &test);
                 let settings = ctx.parameters("pvmf::settings", &settings);
+                let samplers = ComparisonSamplers::shared(ctx.device, ctx.pool);
                 let resources = [
                     Binding::Texture(&map),
                     Binding::Texture(&mask.mask_depth),
                     Binding::Texture(&mask.edge_distance),
-                    ctx.shared.samplers.binding(params.filter),
+                    samplers.binding(params.filter),
                     Binding::Buffer(&test),
                     Binding::Buffer(&settings),
                     Binding::Texture(&estimate.raw),
@@ -403,7 +404,7 @@ impl PenumbraVolumeMaskFiltering {
             let (mut stats, mut cache_hits, mut vertices) = (MaskStats::default(), 0, Vec::new());
             // A point light has no penumbra: no volumes, and nothing is filtered.
             if r > 0.0 {
-                let silhouette = ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
+                let silhouette = ctx.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
                 cache_hits = silhouette.cache_hits;
                 // Beyond the far plane from any moved point (they lie between l and the edges).
                 let reach = 4.0 * projection.far() as f64 + 4.0 * r;

@@ -45,7 +45,7 @@ use crate::light_sampling::{light_samples, scene_sphere_samples, SampleUniform, 
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 
 use acceleration::AccelerationCache;
 
@@ -171,7 +171,7 @@ impl Method for RaytracedShadows {
                     layout::storage_buffer,
                     layout::storage_buffer_rw,
                     layout::storage_buffer_rw,
-                    |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                    |b| layout::storage_texture(b, formats::VISIBILITY),
                     layout::storage_buffer_rw,
                 ],
                 &["trace", "classify", "select_pixels", "refine"],

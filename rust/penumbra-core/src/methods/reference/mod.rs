@@ -41,7 +41,7 @@ use crate::light_frustum::{light_sample_error, LightProjection};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 use crate::light_sampling::{light_samples, scene_axis, scene_sphere_samples, LightSample, Strata};
@@ -142,7 +142,7 @@ impl Method for ReferenceShadows {
                 layout::depth_array,
                 layout::parameters,
                 layout::storage_buffer_rw,
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
                 layout::parameters,
             ],
             &["accumulate", "resolve"],
@@ -222,7 +222,7 @@ impl Method for ReferenceShadows {
                 }
                 let map = &maps.iter().find(|(l, _)| *l == layers).expect("made above").1;
                 faces += projection.active_faces() as usize;
-                ctx.shared.shadow_map.record(ctx, encoder, map, projection, depth, timestamps, (i == 0, false));
+                ShadowMapPass::shared(ctx.device, ctx.pool).record(ctx, encoder, map, projection, depth, timestamps, (i == 0, false));
                 let bind_group = self.pass.bind_group(
                     ctx,
                     &[

@@ -50,7 +50,7 @@ use crate::light_sampling::{scene_sphere_samples, LightSample, SampleUniform, DE
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 
 /// Pixels per tile side and tiles per group side (masks.wgsl's TILE, GROUP).
 pub const TILE: u32 = 16;
@@ -207,7 +207,7 @@ impl Method for TriangleMasks {
                 layout::storage_buffer_rw,
                 layout::storage_buffer_rw,
                 layout::storage_buffer_rw,
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
             ],
             &["tile_bounds", "group_bounds", "count_bins", "scan_bins", "fill_bins", "masks"],
         );

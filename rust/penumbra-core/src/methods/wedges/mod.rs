@@ -43,7 +43,7 @@ use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::screen::ScreenPass;
-use crate::passes::shading::VISIBILITY_FORMAT;
+use crate::gpu::formats;
 use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::shadow_map::{self, CENTRE_MAP};
 use crate::passes::volumes::VolumePass;
@@ -237,9 +237,9 @@ impl Method for PenumbraWedges {
                 layout::storage_buffer,
                 layout::storage_buffer,
                 layout::parameters,
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
-                |b| layout::storage_texture(b, VISIBILITY_FORMAT),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
+                |b| layout::storage_texture(b, formats::VISIBILITY),
                 layout::storage_buffer_rw,
                 object_map::map_binding,
                 layout::parameters,
@@ -326,7 +326,7 @@ impl PenumbraWedges {
             let mut cache_hits = 0;
             // A point light has no penumbra: no wedges, the hard shadow alone.
             if r > 0.0 {
-                let silhouette = ctx.shared.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
+                let silhouette = ctx.silhouettes.seen_from_light(ctx.prepared, l, params.open_edges, params.repairs.hidden)?;
                 cache_hits = silhouette.cache_hits;
                 // Coverage measures a corner exactly: extra wedges there would add nothing.
                 let acute = if params.intensity == Intensity::Coverage { 0 } else { params.acute_wedges };
