@@ -45,7 +45,7 @@ pub trait Method: Send + Sync + Sized + 'static {
 
     /// The passes whose outputs the pass cache may keep for it (the
     /// G-buffer is always cacheable; the centre shadow map is
-    /// [`crate::passes::shadow_map::CENTRE_MAP`]).
+    /// [`crate::passes::centre_map::CENTRE_MAP`]).
     fn cached_passes() -> &'static [CachedPass] {
         &[]
     }

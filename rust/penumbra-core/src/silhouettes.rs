@@ -13,6 +13,11 @@ use crate::occluders::Occluders;
 use crate::scene::{PreparedMesh, PreparedScene};
 use crate::topology::{ConnectivityStats, Part, Topology, NO_FACE, WELD_TOLERANCE};
 
+/// The object of a mesh made of several separate surfaces
+/// ([`SilhouetteCache::mesh_objects`]; the object map's "cannot tell"): it
+/// cannot tell its own body from another surface of the same mesh.
+pub const MANY: u32 = u32::MAX;
+
 /// How casters with boundary edges are treated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum OpenEdges {
@@ -308,7 +313,6 @@ impl SilhouetteCache {
     /// sliver's stray corner does not split its mesh; a surface split over
     /// meshes is one object.
     pub fn mesh_objects(&self, scene: &PreparedScene) -> Vec<u32> {
-        use crate::passes::object_map::MANY;
         let topology = self.topology(scene_key(scene), scene);
         // None: no face yet; Some(MANY): faces of several components.
         let mut objects: Vec<Option<u32>> = vec![None; scene.meshes.len()];

@@ -1,6 +1,7 @@
 //! Passes shared by every method: the camera G-buffer, the light's depth
 //! map, and the shading of SPEC section 3.
 
+pub mod centre_map;
 pub mod gbuffer;
 pub mod object_map;
 pub mod samplers;

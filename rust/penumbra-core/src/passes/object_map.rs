@@ -28,9 +28,7 @@ pub const OBJECT_MAP: CachedPass = CachedPass { name: "object_map", capacity: 2 
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
-/// The object of a mesh made of several separate surfaces: it cannot tell
-/// its own body from another surface of the same mesh.
-pub const MANY: u32 = u32::MAX;
+pub use crate::silhouettes::MANY;
 
 /// One corner as the object-map raster reads it.
 #[repr(C)]

@@ -43,7 +43,8 @@ use crate::params::{ParamSet, ParamSpec};
 use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
 use crate::gpu::formats;
-use crate::passes::shadow_map::{self, ShadowMapPass};
+use crate::passes::centre_map;
+use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 
 /// Deepest quadtree level `max_depth` may ask for.
@@ -469,7 +470,7 @@ impl Method for AdaptiveShadows {
         let flags = u32::from(params.pcf_2x2);
         if frame.ctx.light.radius == 0.0 {
             // A point light: one map, `hard`'s.
-            let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+            let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
             let mut test = params.shadow.uniform(&projection, frame.ctx.light.center_f32, 0.0, flags);
             test.set_center_w(1.0);
             frame.pass("evaluate", |ctx, encoder, ts| self.evaluate(ctx, encoder, ts, &[(&map, test)], &visibility))?;

@@ -39,7 +39,7 @@ use crate::passes::screen::ScreenPass;
 use crate::gpu::formats;
 use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::volumes::VolumePass;
-use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 
 /// The min/max hierarchy of the centre map, as the pass cache keeps it.
@@ -352,7 +352,7 @@ impl Method for SoftShadowBackprojection {
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &BackprojectionParams) -> Result<MethodOutput> {
-        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
         let layout = HierarchyLayout::new(params.shadow.map_size, projection.layers());
         frame.ctx.check_buffer("backprojection", "the min/max hierarchy", layout.bytes(), "map_size")?;
         let (w, h) = frame.ctx.size;
@@ -360,7 +360,7 @@ impl Method for SoftShadowBackprojection {
         frame.ctx.check_buffer("backprojection", "the list of penumbra pixels", list_bytes, "the image size")?;
 
         let mut key = PassKey::new(HIERARCHY.name);
-        key.key(&shadow_map::centre_map_key(&frame.ctx, &params.shadow, &projection));
+        key.key(&centre_map::centre_map_key(&frame.ctx, &params.shadow, &projection));
         let hierarchy = frame.cached(HIERARCHY.name, key.finish(), |frame| {
             let buffer = frame.ctx.buffer("backprojection::hierarchy", layout.bytes(), wgpu::BufferUsages::STORAGE);
             frame.pass(HIERARCHY.name, |ctx, encoder, ts| self.record_hierarchy(ctx, encoder, &map, &projection, &layout, &buffer, ts))?;

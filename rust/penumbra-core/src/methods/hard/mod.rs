@@ -10,7 +10,7 @@ use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
 use crate::passes::screen::ScreenPass;
 use crate::gpu::formats;
-use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 
 /// `hard` is the shadow-map test alone.
@@ -51,7 +51,7 @@ impl Method for HardShadow {
 
     /// The shadow-map test per G-buffer pixel.
     fn record(&self, frame: &mut Frame<'_>, params: &HardParams) -> Result<MethodOutput> {
-        let (map, projection) = shadow_map::centre_map(frame, params)?;
+        let (map, projection) = centre_map::centre_map(frame, params)?;
         let visibility = frame.ctx.screen_texture("hard::visibility");
         frame.pass("visibility", |ctx, encoder, ts| {
             let uniforms = ctx.parameters("hard::uniforms", &params.uniform(&projection, ctx.light.center_f32, 0.0, 0));

@@ -25,7 +25,7 @@ use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
 use crate::gpu::formats;
 use crate::passes::object_map::{self, OBJECT_MAP};
-use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::volumes::VolumePass;
 use crate::passes::shadow_test::ShadowMapSettings;
 
@@ -183,7 +183,7 @@ impl Method for PercentageCloserSoftShadows {
 
     /// Blocker search, penumbra estimate and filter per G-buffer pixel.
     fn record(&self, frame: &mut Frame<'_>, params: &PcssParams) -> Result<MethodOutput> {
-        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
         let objects = object_map::record_if(frame, params.horizon && frame.ctx.light.radius > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
         let visibility = frame.ctx.screen_texture("pcss::visibility");
         // Estimated penumbra width in map texels and mean blocker depth in

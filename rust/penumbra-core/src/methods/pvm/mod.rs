@@ -30,7 +30,7 @@ use crate::pass_cache::{CachedPass, PassKey};
 use crate::gpu::formats;
 use crate::passes::screen::ScreenPass;
 use crate::passes::object_map::{self, OBJECT_MAP};
-use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 use crate::passes::volumes::VolumePass;
 pub use crate::silhouettes::{silhouette, OpenEdges, Repairs, SilhouetteCache, SilhouetteEdge};
@@ -204,7 +204,7 @@ impl Method for PenumbraVolumeMaps {
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmParams) -> Result<MethodOutput> {
-        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
         let light = frame.ctx.light;
         let (l, r) = (light.center, light.radius);
         let mut key = PassKey::new(PENUMBRA_VOLUMES.name);

@@ -36,7 +36,7 @@ use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
 use crate::gpu::formats;
 use crate::passes::object_map::{self, OBJECT_MAP};
-use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 use crate::passes::volumes::VolumePass;
 use crate::silhouettes::{OpenEdges, Repairs};
@@ -302,7 +302,7 @@ impl Method for PenumbraVolumeMaskFiltering {
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmfParams) -> Result<MethodOutput> {
-        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
         let light = frame.ctx.light;
         let (l, r) = (light.center, light.radius);
         let mut mask_key = PassKey::new(MASK.name);
@@ -317,7 +317,7 @@ impl Method for PenumbraVolumeMaskFiltering {
         // The estimate reads the G-buffer, the shadow map and the mask (their
         // keys), and its own uniforms: everything but n_blur.
         let mut key = PassKey::new(ESTIMATION.name);
-        key.key(&frame.ctx.gbuffer_key).key(&shadow_map::centre_map_key(&frame.ctx, &params.shadow, &projection)).key(&mask_key);
+        key.key(&frame.ctx.gbuffer_key).key(&centre_map::centre_map_key(&frame.ctx, &params.shadow, &projection)).key(&mask_key);
         estimate_key(params, &projection, (light.center_f32, light.radius_f32), &mut key);
         // The object map is a function of the centre map's key (geometry,
         // projection, map size), which the estimate's key holds.

@@ -45,7 +45,7 @@ use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::screen::ScreenPass;
 use crate::gpu::formats;
 use crate::passes::object_map::{self, OBJECT_MAP};
-use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::volumes::VolumePass;
 use crate::passes::shadow_test::ShadowMapSettings;
 use crate::silhouettes::{OpenEdges, Repairs};
@@ -250,7 +250,7 @@ impl Method for PenumbraWedges {
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &WedgesParams) -> Result<MethodOutput> {
-        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
         let light = frame.ctx.light;
         let mut key = PassKey::new(PENUMBRA_WEDGES.name);
         key.key(&frame.ctx.gbuffer_key)
