@@ -355,7 +355,7 @@ def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_ra
 
 
 # The closed 2-manifold meshes of ../shared/meshes (its SOURCES.md), which the
-# real-mesh accuracy suite and benchmarks/real_meshes.py render.
+# real-mesh accuracy suite and benchmarks/real_meshes.toml render.
 CLOSED_MESHES = ("cube.obj", "spot.obj", "teapot-mcguire-closed.obj")
 # (setup, light radius) per real-mesh scene: two radii seen close, and the wide floor.
 SUITE_SETUPS = (("close", 0.3), ("close", 0.8), ("wide_floor", 0.3))
