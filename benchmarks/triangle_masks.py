@@ -40,11 +40,9 @@ def agreement(size: int) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = parser.add_subparsers(dest="what", required=True)
-    a = sub.add_parser("agreement")
-    a.add_argument("--size", type=int, default=64)
-    args = parser.parse_args()
-    agreement(args.size)
+    parser.add_argument("what", choices=["agreement"])
+    parser.add_argument("--size", type=int, default=64)
+    agreement(parser.parse_args().size)
 
 
 if __name__ == "__main__":
