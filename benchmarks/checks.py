@@ -15,7 +15,6 @@ The scenes are those of tests/test_ground_truth.py and tests/test_pvm.py.
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
@@ -55,7 +54,7 @@ def estimator_against_closed_form() -> None:
     region = seen & metrics.penumbra_region(closed)
     error = metrics.rmse(gt.visibility, closed, region)
     assert gt.second is not None
-    noise = metrics.rmse(gt.visibility, gt.second.visibility, region) / math.sqrt(2)
+    noise = metrics.seed_noise(gt.visibility, gt.second.visibility, region)
     print(f"2. visibility estimator against the cap-overlap closed form: RMSE {error:.5f}, its noise {noise:.5f} ({region.sum()} penumbra pixels)")
 
 

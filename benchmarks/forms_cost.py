@@ -16,13 +16,12 @@ from pathlib import Path
 import penumbra
 from penumbra import forms, scenes
 
-MESHES = Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes"
 PARAMS = {"reference": {"n_samples": 64}, "raytraced": {"n_samples": 16}, "triangle_masks": {"n_samples": 64}}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("meshes", nargs="*", default=[str(MESHES / "spot.obj"), str(MESHES / "corpus" / "cat-low-resolution.obj")])
+    parser.add_argument("meshes", nargs="*", default=[str(scenes.meshes_folder() / m) for m in ("spot.obj", "corpus/cat-low-resolution.obj")])
     parser.add_argument("--size", type=int, default=128)
     parser.add_argument("--rounds", type=int, default=5)
     args = parser.parse_args()

@@ -11,7 +11,6 @@ visibility over all pixels and over the penumbra, radiance relative to the lit m
 from __future__ import annotations
 
 import argparse
-import math
 
 import penumbra
 from penumbra import metrics
@@ -32,9 +31,9 @@ def main() -> None:
         a = pm.ground_truth(scene, spp=spp, seed=0, cache=False)
         b = pm.ground_truth(scene, spp=spp, seed=1, cache=False)
         region = metrics.penumbra_region(a.visibility)
-        noise_all = metrics.rmse(a.visibility, b.visibility) / math.sqrt(2)
-        noise_pen = metrics.rmse(a.visibility, b.visibility, region) / math.sqrt(2)
-        noise_rad = metrics.rmse(a.radiance, b.radiance) / math.sqrt(2) / metrics.lit_mean(a.radiance, a.visibility)
+        noise_all = metrics.seed_noise(a.visibility, b.visibility)
+        noise_pen = metrics.seed_noise(a.visibility, b.visibility, region)
+        noise_rad = metrics.seed_noise(a.radiance, b.radiance) / metrics.lit_mean(a.radiance, a.visibility)
         rspp = pm.radiance_spp(spp)
         label = f"{spp}" if rspp == spp else f"{spp} (radiance {rspp})"
         print(f"| {label} | {a.seconds['radiance']:.2f} | {a.seconds['visibility']:.2f} | {noise_all:.5f} | {noise_pen:.5f} | {noise_rad:.5f} |")

@@ -15,7 +15,6 @@ twice the ground-truth noise plus the resolution error.
 from __future__ import annotations
 
 import argparse
-import math
 
 import penumbra
 from penumbra import metrics
@@ -61,7 +60,7 @@ def main() -> None:
             finer = renderer.render(scene, "reference", n_samples=n_max, map_size=4096).visibility
             error = metrics.rmse(base, gt.visibility, region)
             noise = m["noise_visibility_rmse_penumbra"]
-            sampling_noise = metrics.rmse(base, other_seed, region) / math.sqrt(2)
+            sampling_noise = metrics.seed_noise(base, other_seed, region)
             resolution = metrics.rmse(base, finer, region)
             bound = 2 * noise + resolution
             parts.append(

@@ -23,8 +23,6 @@ import numpy as np
 import penumbra
 from penumbra import rooms
 
-# As the tests find them (tests/stress_scenes.py): ../shared/meshes beside the checkout.
-MESHES = Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes"
 METHODS = ["pcf", "pcss", "pvm", "pvmf", "wedges", "backprojection", "adaptive", "reference"]
 # `reference` at low samples: the cheap way to the truth, beside the soft methods.
 PARAMS = {"reference": {"n_samples": 64}}
@@ -56,7 +54,7 @@ def main() -> None:
     parser.add_argument("--methods", nargs="*", default=METHODS)
     parser.add_argument("--scenes", nargs="*", help="scene names of the suite (all by default)")
     parser.add_argument("--truth-samples", type=int, default=rooms.TRUTH_SAMPLES)
-    parser.add_argument("--meshes", type=Path, default=MESHES, help="the folder of CornellBox-Original.obj (default ../shared/meshes)")
+    parser.add_argument("--meshes", type=Path, default=penumbra.scenes.meshes_folder() or Path("../shared/meshes"), help="the folder of CornellBox-Original.obj (default ../shared/meshes)")
     parser.add_argument("--json", help="write every row here")
     parser.add_argument("--images", help="write every visibility image here (.npz)")
     parser.add_argument("--truth-from", help="take the truths from the images of an earlier run (.npz of --images)")

@@ -77,6 +77,14 @@ def test_the_repository_config_loads_full_and_quick() -> None:
         ("scenes = ['sphere_on_plane']\n[methods]\nhard = 3\n", "methods.hard must be a table"),
         ("scenes = [\n", "not valid TOML"),
         ("scenes = ['sphere_on_plane']\n[quick]\nrepeats = 'two'\n", "[quick]: 'repeats' must be an integer"),
+        # Scene tables (variants).
+        ("scenes = [{ light_radius = 0.1 }]\n", "a scene table takes 'scene'"),
+        ("scenes = [{ scene = 'cube_on_plane', radius = 0.1 }]\n", "a scene table takes 'scene'"),
+        ("scenes = [{ scene = 'cube_on_plane', light_radius = -1 }]\n", "'light_radius' must be a number of at least 0"),
+        ("scenes = [{ scene = 'cube_on_plane', setup = 'close' }]\n", "places 'mesh:<file>' scenes only"),
+        ("scenes = [{ scene = 'cube_on_plane', light_radius = [0.1, 0.2], label = 'x' }]\n", "'label' names one scene"),
+        ("scenes = [{ scene = 'no_such_scene' }]\n", "unknown scenes"),
+        ("scenes = ['sphere_on_plane']\ntable = [1]\n", "'table' must be a list of results.csv column names"),
     ],
 )
 def test_bad_configs_name_the_problem(tmp_path: Path, text: str, message: str) -> None:
@@ -84,6 +92,68 @@ def test_bad_configs_name_the_problem(tmp_path: Path, text: str, message: str) -
     path.write_text(text)
     with pytest.raises(ParameterError, match=message.replace("[", r"\[").replace("]", r"\]")):
         bench.load_config(path, quick=True)
+
+
+def test_scene_tables_expand_to_labelled_variants(tmp_path: Path) -> None:
+    import penumbra
+
+    path = tmp_path / "v.toml"
+    path.write_text(
+        "scenes = ['sphere_on_plane', { scene = 'cube_on_plane', light_radius = [0.1, 0.4] }, 'wide_floor',"
+        " { scene = 'resting_box', light_radius = 0.2, label = 'box' }]\n"
+        "table = ['visibility_rmse_penumbra']\n[large]\nscenes = ['cube_on_plane r=0.4']\nwidth = 16\nheight = 8\n"
+    )
+    cfg = bench.load_config(path)
+    assert cfg.scenes == ["sphere_on_plane", "cube_on_plane r=0.1", "cube_on_plane r=0.4", "wide_floor", "box"]
+    assert cfg.large["scenes"] == ["cube_on_plane r=0.4"], "a [large] part names the main part's variants by label"
+    assert cfg.table == ["visibility_rmse_penumbra"]
+    swept = cfg.scene("cube_on_plane r=0.4", 16, 8)
+    plain = penumbra.scenes.get("cube_on_plane", width=16, height=8)
+    assert swept.light.radius == pytest.approx(0.4) and swept.name == "cube_on_plane r=0.4"
+    assert swept.light.intensity.tolist() == plain.light.intensity.tolist(), "the same light, another radius"
+    assert cfg.scene("sphere_on_plane", 16, 8).camera.width == 16
+    assert cfg.scene("wide_floor", 16, 8).meshes[1].name == "box", "the wide floor's own box caster"
+
+
+def test_mesh_variants_are_the_real_mesh_suites_scenes() -> None:
+    import penumbra
+
+    root = penumbra.scenes.meshes_folder()
+    if root is None:
+        pytest.skip("needs the shared meshes")
+    variant = bench.SceneVariant("mesh:spot.obj", 0.3, "wide_floor", "spot")
+    suite = penumbra.scenes.real_mesh_suite(str(root), width=24, height=24, meshes=("spot.obj",))["spot.obj wide_floor r=0.3"]
+    built = variant.build(24, 24)
+    # The ground truth's cache key: the same scene hashes the same, so its cached truth is reused.
+    assert pm._scene_key(built, built.camera).hexdigest() == pm._scene_key(suite, suite.camera).hexdigest()
+    assert built.name == "spot"
+
+
+def test_markdown_table_writes_the_chosen_columns() -> None:
+    rows = [
+        {"scene": "s", "size": "8x8", "method": "hard", "label": "default", "visibility_rmse_penumbra": 0.123456, "stat_wedges": ""},
+        {"scene": "s", "size": "8x8", "method": "wedges", "label": "default", "visibility_rmse_penumbra": 0.05, "stat_wedges": 120.0},
+    ]
+    text = bench.markdown_table(rows, ["visibility_rmse_penumbra", "stat_wedges"])
+    assert text.splitlines() == [
+        "| scene | size | method | setting | visibility_rmse_penumbra | stat_wedges |",
+        "|---|---|---|---|---|---|",
+        "| s | 8x8 | hard | default | 0.1235 |  |",
+        "| s | 8x8 | wedges | default | 0.05 | 120 |",
+    ]
+
+
+def test_every_study_config_loads() -> None:
+    import penumbra
+
+    if penumbra.scenes.meshes_folder() is None:
+        pytest.skip("the studies' real scenes need the shared meshes")
+    implemented = set(penumbra.methods())
+    for path in sorted(CONFIG.parent.glob("*.toml")):
+        cfg = bench.load_config(path)
+        assert cfg.scenes and set(cfg.methods) <= implemented, path.name
+        for label in cfg.scenes + list(cfg.large.get("scenes", [])):
+            assert cfg.scene(label, 8, 8).camera.width == 8, (path.name, label)
 
 
 def test_a_missing_config_is_a_clear_cli_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -112,7 +112,7 @@ def test_hard_matches_exact_ray_casting_beyond_the_outline(renderer: penumbra.Re
     # With its default bias, `hard` at radius 0 agrees with CPU ray casting of
     # the light's centre everywhere but a one-pixel band along shadow outlines:
     # no acne, no light leaks (the table in docs/methods/hard.md comes from
-    # benchmarks/bias_study.py, the same comparison at 256x256).
+    # `python benchmarks/point_light.py bias`, the same comparison at 256x256).
     scene = penumbra.scenes.get(name, width=128, height=128, light_radius=0.0)
     result = renderer.render(scene)
     geometry = result.object_id >= 0

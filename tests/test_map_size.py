@@ -3,7 +3,7 @@ on the receivers, an explicit size is used as given, and on the built-in
 scenes at 128x128 the automatic size costs no accuracy against maps of 2048
 (within the ground truth's noise). It is not the default: on the real meshes
 with a small light seen close it does cost accuracy (up to 0.17 penumbra
-RMSE), which `python3 benchmarks/map_size.py` measures and docs/scaling.md
+RMSE), which `penumbra bench --config benchmarks/map_size.toml` measures and docs/scaling.md
 tabulates; these tests hold what the docs claim."""
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ def test_auto_cube_faces_are_capped(renderer: penumbra.Renderer) -> None:
 
 
 BUILT_IN = penumbra.scenes.names()
-# The methods benchmarks/map_size.py measured (docs/scaling.md).
+# The methods benchmarks/map_size.toml measures (docs/scaling.md).
 MEASURED = ["hard", "pcf", "pcss", "pvm", "pvmf"]
 
 

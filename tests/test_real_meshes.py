@@ -1,7 +1,7 @@
 """Real meshes from ../shared/meshes with every method (issue 8), and the
 volume methods held to their measured accuracy on them against Mitsuba
 ground truth (issue 15; docs/real_meshes.md has the tables these bounds come
-from, `python3 benchmarks/real_meshes.py` prints them).
+from, `penumbra bench --config benchmarks/real_meshes.toml` writes them).
 
 Skipped when the meshes are absent (they are never copied into the
 repository); the accuracy tests also need Mitsuba. Ground truth is cached
@@ -104,7 +104,7 @@ def test_cornell_box_relative_indices_are_resolved(loaded: dict[str, penumbra.Sc
 SIZE = 160
 GT_SPP = 1024
 ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts" / "real_meshes"
-# The settings docs/real_meshes.md recommends (benchmarks/real_meshes.py).
+# The settings docs/real_meshes.md recommends (benchmarks/real_meshes.toml).
 PVMF_RECOMMENDED: dict[str, Any] = {"kernel": "disk", "n_blur": 0, "offsets": "radius", "umbra": "skip", "s_e": 0.02}
 CONFIGS: dict[str, tuple[str, dict[str, Any]]] = {
     "pvm": ("pvm", {}),
@@ -112,7 +112,7 @@ CONFIGS: dict[str, tuple[str, dict[str, Any]]] = {
     "pvmf-recommended": ("pvmf", PVMF_RECOMMENDED),
 }
 
-# Penumbra visibility RMSE measured by benchmarks/real_meshes.py (160 x 160,
+# Penumbra visibility RMSE measured by benchmarks/real_meshes.toml (160 x 160,
 # ground truth at 1024 samples, whose own noise is 0.002-0.003 here) per
 # scene and configuration; each test allows it 15% and 0.005 more.
 MEASURED: dict[str, dict[str, float]] = {
@@ -251,7 +251,7 @@ def test_a_failed_bound_leaves_the_images_behind(renderer: penumbra.Renderer, tr
 
 
 # The open and non-manifold meshes, seen close at the suite's two radii:
-# penumbra RMSE measured by benchmarks/real_meshes.py (pvm with its
+# penumbra RMSE measured by benchmarks/real_meshes.toml (pvm with its
 # defaults, pvmf with the recommended settings), each allowed 15% and 0.005
 # more, and the same targets as the closed meshes.
 OPEN_MEASURED: dict[tuple[str, float], dict[str, float]] = {

@@ -219,7 +219,7 @@ def test_visibility_does_not_depend_on_the_scene_scale(renderer: penumbra.Render
 
 
 def thin_prism() -> penumbra.Mesh:
-    """benchmarks/wedges.py's caster: a triangle with a 23-degree tip, 0.1 thick."""
+    """benchmarks/exact_edges.py's acute caster: a triangle with a 23-degree tip, 0.1 thick."""
     pts = np.array([(-1.5, -0.6), (1.5, 0.0), (-1.5, 0.6)])
     v = np.vstack([np.c_[pts[:, 0], np.full(3, 1.9), pts[:, 1]], np.c_[pts[:, 0], np.full(3, 2.0), pts[:, 1]]])
     f = np.array([[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [2, 0, 3], [2, 3, 5]])[:, ::-1]
@@ -227,7 +227,7 @@ def thin_prism() -> penumbra.Mesh:
 
 
 def test_extra_wedges_at_an_acute_tip_bring_it_closer_to_ground_truth(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
-    """4.1, Figure 7: measured at 96x96 (benchmarks/wedges.py has 128x128):
+    """4.1, Figure 7: measured at 96x96 (benchmarks/exact_edges.py --parts acute has 128x128):
     acute_wedges=6 takes the penumbra RMSE from 0.073 to 0.055 (0.76 of it)."""
     pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
     from penumbra import metrics

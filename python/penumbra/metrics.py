@@ -28,6 +28,7 @@ __all__ = [
     "lit_mean",
     "rmse",
     "mae",
+    "seed_noise",
     "flip",
     "compare_images",
     "compare",
@@ -93,6 +94,14 @@ def rmse(a: np.ndarray, b: np.ndarray, mask: np.ndarray | None = None) -> float:
     if mask is not None:
         d = d[mask]
     return float(np.sqrt(np.mean(d * d))) if d.size else math.nan
+
+
+def seed_noise(a: np.ndarray, b: np.ndarray, mask: np.ndarray | None = None) -> float:
+    """The noise of one of two estimates that differ only in their seed (two
+    ground truths, two renders of a sampling method): their RMSE over
+    ``mask`` divided by sqrt(2), since independent noise adds in quadrature.
+    The one place the benchmarks and the ``noise_<metric>`` keys take it from."""
+    return rmse(a, b, mask) / math.sqrt(2)
 
 
 def mae(a: np.ndarray, b: np.ndarray, mask: np.ndarray | None = None) -> float:

@@ -164,11 +164,14 @@ def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = N
     (:func:`meshes_folder`; :func:`real_names` lists the forms):
     ``"generated:<seed>"`` (:func:`generate`), ``"mesh:<file>"``
     (:func:`from_mesh`, ``setup="close"``), ``"wide_floor:<file>"``
-    (:func:`wide_floor`), ``"cornell_box"`` and ``"sponza"``."""
+    (:func:`wide_floor`), ``"cornell_box"`` and ``"sponza"``; and
+    ``"wide_floor"``, :func:`wide_floor` with its box caster (no mesh file)."""
     if not isinstance(name, str):
         raise ParameterError(f"unknown scene {name!r}: a scene name is a string; built-in scenes: {names()}")
     if name in _SCENES:
         scene = _SCENES[name]()
+    elif name == "wide_floor":
+        scene = wide_floor(width=_WIDTH if width is None else width, height=height if height is not None else (_HEIGHT if width is None else width))
     else:
         scene = _real_scene(name, _WIDTH if width is None else width, height if height is not None else (_HEIGHT if width is None else width))
     assert scene.camera is not None
@@ -197,7 +200,7 @@ def _parse(name: str) -> tuple[str, str]:
     """(kind, argument) of a scene name that is not built in; a
     :class:`ParameterError` naming the forms for anything else."""
     kind, _, arg = name.partition(":")
-    if name in ("cornell_box", "sponza"):
+    if name in ("cornell_box", "sponza", "wide_floor"):
         return name, ""
     if kind == "generated" and arg.isdigit():
         return kind, arg
@@ -352,7 +355,7 @@ def from_mesh(path: str, *, width: int = _WIDTH, height: int = _HEIGHT, light_ra
 
 
 # The closed 2-manifold meshes of ../shared/meshes (its SOURCES.md), which the
-# real-mesh accuracy suite and benchmarks/real_meshes.py render.
+# real-mesh accuracy suite and benchmarks/real_meshes.toml render.
 CLOSED_MESHES = ("cube.obj", "spot.obj", "teapot-mcguire-closed.obj")
 # (setup, light radius) per real-mesh scene: two radii seen close, and the wide floor.
 SUITE_SETUPS = (("close", 0.3), ("close", 0.8), ("wide_floor", 0.3))

@@ -7,7 +7,7 @@ take either.
 sphere sampling and converges to the fraction of the light's solid angle a
 point sees, what Mitsuba's visibility measures (its penumbra RMSE against
 Mitsuba at 1024 samples is within the two estimators' noise on every
-built-in and real-mesh scene: ``benchmarks/raytraced_accuracy.py``). Its noise
+built-in and real-mesh scene: ``python benchmarks/raytraced.py accuracy``). Its noise
 floor comes, as Mitsuba's does, from a second render with another seed
 (``.second``). Mitsuba stays the independent default: this truth shares the
 engine's G-buffer, shading and scene preparation with the methods it

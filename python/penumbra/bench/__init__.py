@@ -22,7 +22,16 @@ Written to ``--out`` (default ``benchmarks/results/<config name>``):
   time over the time ``reference`` and Mitsuba need for the same error;
 - ``scaling.csv`` and ``scaling.png``: cost against image size and against
   penumbra area on screen (a light-radius sweep);
+- ``table.md`` (with a ``table`` list of columns): one line per scene and
+  configuration with those columns of ``results.csv``, a study's own table;
 - ``machine.md``: the machine, the adapter, the versions and the commit.
+
+An entry of ``scenes`` is a scene name or a table of variants: ``{ scene =
+"cube_on_plane", light_radius = [0.1, 0.4] }`` (a light-radius sweep),
+``{ scene = ["mesh:spot.obj", "mesh:cube.obj"], setup = "wide_floor",
+light_radius = 0.3 }`` (a mesh placed by :func:`penumbra.scenes.from_mesh`'s
+``setup``), with ``label`` to name a single one; the results name each by its
+label (``cube_on_plane r=0.1``, ``mesh:spot.obj wide_floor r=0.3``).
 """
 
 from __future__ import annotations
@@ -31,11 +40,12 @@ import argparse
 from pathlib import Path
 from typing import Sequence
 
-from penumbra.bench.config import BenchConfig, expand, label, load_config
+from penumbra.bench.config import BenchConfig, SceneVariant, expand, label, load_config
 from penumbra.bench.report import (
     ERROR,
     Point,
     aggregate,
+    markdown_table,
     pareto_front,
     pareto_table,
     plot_pareto,
@@ -48,6 +58,7 @@ from penumbra.bench.runner import machine_description, make_renderer, run, run_s
 
 __all__ = [
     "BenchConfig",
+    "SceneVariant",
     "load_config",
     "expand",
     "label",
@@ -65,6 +76,7 @@ __all__ = [
     "plot_pareto",
     "plot_scaling",
     "write_csv",
+    "markdown_table",
     "main",
     "build_parser",
     "run_from_args",

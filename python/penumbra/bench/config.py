@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 import tomllib
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -14,8 +14,9 @@ from penumbra import scenes
 from penumbra.errors import ParameterError
 from penumbra.grid import expand as expand_grids
 from penumbra.grid import label
+from penumbra.scene import Scene
 
-__all__ = ["BenchConfig", "load_config", "expand", "label"]
+__all__ = ["BenchConfig", "SceneVariant", "load_config", "expand", "label"]
 
 _KEYS = {
     "scenes": list,
@@ -29,7 +30,35 @@ _KEYS = {
     "scaling": dict,
     "large": dict,
     "radiance": bool,
+    "table": list,
 }
+
+
+@dataclass(frozen=True)
+class SceneVariant:
+    """One scene of a run: a scene name (:func:`penumbra.scenes.get`) and,
+    from a table entry of ``scenes``, another light radius or, for a
+    ``mesh:<file>`` name, another placement (:func:`penumbra.scenes.from_mesh`'s
+    ``setup``: ``close``, the name's own, ``default`` or ``wide_floor``).
+    ``label`` names it in the results."""
+
+    scene: str
+    light_radius: float | None = None
+    setup: str | None = None
+    label: str = ""
+
+    def build(self, width: int, height: int) -> Scene:
+        """The scene at ``width`` x ``height``, named by its label."""
+        if self.setup is None:
+            scene = scenes.get(self.scene, width=width, height=height, light_radius=self.light_radius)
+        else:
+            # Built as from_mesh builds it (the light's own intensity at this radius), as real_mesh_suite does.
+            root = scenes.meshes_folder()
+            if root is None:
+                raise ParameterError(f"scene {self.label!r} needs the shared meshes: set PENUMBRA_MESHES")
+            radius = 0.5 if self.light_radius is None else self.light_radius
+            scene = scenes.from_mesh(str(root / self.scene.partition(":")[2]), width=width, height=height, light_radius=radius, setup=self.setup)
+        return replace(scene, name=self.label or self.scene)
 
 
 @dataclass
@@ -37,6 +66,7 @@ class BenchConfig:
     """What to run (see ``benchmarks/bench.toml`` for every key)."""
 
     name: str
+    #: The scenes' labels, in order: a scene name, or a variant's label (``variants``).
     scenes: list[str]
     size: int = 128
     ground_truth_spp: int = 1024
@@ -57,6 +87,15 @@ class BenchConfig:
     #: A second part at another size: ``scenes``, ``width``, ``height`` and
     #: optionally ``ground_truth_spp``, ``methods``, ``peers`` (else the main ones).
     large: dict[str, Any] = field(default_factory=dict)
+    #: Columns of ``results.csv`` written as ``table.md``: one line per scene
+    #: and configuration (empty: no table).
+    table: list[str] = field(default_factory=list)
+    #: Every scene label of the run (both parts) -> what to build.
+    variants: dict[str, SceneVariant] = field(default_factory=dict)
+
+    def scene(self, label: str, width: int, height: int) -> Scene:
+        """The run's scene ``label`` at ``width`` x ``height``."""
+        return self.variants.get(label, SceneVariant(label, label=label)).build(width, height)
 
 
 def _checked(values: dict[str, Any], where: str) -> dict[str, Any]:
@@ -98,7 +137,10 @@ def load_config(path: str | os.PathLike[str], quick: bool = False) -> BenchConfi
     if quick:
         values.update(_checked(dict(quick_values), f"{path} [quick]"))
     values["methods"] = _grids(values.get("methods", {}), f"{path}")
-    values["scenes"] = _scene_names(values.get("scenes", []), f"{path}")
+    variants: dict[str, SceneVariant] = {}
+    values["scenes"] = _scene_names(values.get("scenes", []), f"{path}", variants)
+    if not all(isinstance(c, str) for c in values.get("table", [])):
+        raise ParameterError(f"{path}: 'table' must be a list of results.csv column names")
     if values.get("large"):
         big = dict(values["large"])
         for key in ("scenes", "width", "height"):
@@ -110,12 +152,12 @@ def load_config(path: str | os.PathLike[str], quick: bool = False) -> BenchConfi
         for key in ("width", "height", "ground_truth_spp"):
             if key in big and (not isinstance(big[key], int) or isinstance(big[key], bool) or big[key] < 1):
                 raise ParameterError(f"{path}: [large] {key!r} must be an integer of at least 1, got {big[key]!r}")
-        big["scenes"] = _scene_names(big["scenes"], f"{path} [large]")
+        big["scenes"] = _scene_names(big["scenes"], f"{path} [large]", variants)
         if "methods" in big:
             big["methods"] = _grids(big["methods"], f"{path} [large]")
         values["large"] = big
     name = path.stem + ("_quick" if quick else "")
-    return BenchConfig(name=name, **values)
+    return BenchConfig(name=name, variants=variants, **values)
 
 
 def _grids(methods_: Any, where: str) -> dict[str, list[dict[str, Any]]]:
@@ -130,20 +172,58 @@ def _grids(methods_: Any, where: str) -> dict[str, list[dict[str, Any]]]:
     return out
 
 
-def _scene_names(entries: Any, where: str) -> list[str]:
-    """The scene names with ``generated:<first>..<last>`` written out, each
-    one known (:func:`penumbra.scenes.get`'s names)."""
+_VARIANT_KEYS = {"scene", "light_radius", "setup", "label"}
+
+
+def _variants(entry: dict[str, Any], where: str) -> list[SceneVariant]:
+    """A ``scenes`` table entry written out: every scene of ``scene`` (a name
+    or a list) at every radius of ``light_radius`` (a number or a list)."""
+    extra = set(entry) - _VARIANT_KEYS
+    if extra or "scene" not in entry:
+        raise ParameterError(f"{where}: a scene table takes 'scene' and optionally 'light_radius', 'setup', 'label'; got {sorted(entry)}")
+    names_ = entry["scene"] if isinstance(entry["scene"], list) else [entry["scene"]]
+    radii = entry.get("light_radius")
+    radii = radii if isinstance(radii, list) else [radii]
+    if not all(r is None or (isinstance(r, (int, float)) and not isinstance(r, bool) and r >= 0) for r in radii):
+        raise ParameterError(f"{where}: 'light_radius' must be a number of at least 0 or a list of them, got {entry['light_radius']!r}")
+    setup = entry.get("setup")
+    if setup is not None and (setup not in scenes.SETUPS or not all(isinstance(n, str) and n.startswith("mesh:") for n in names_)):
+        raise ParameterError(f"{where}: 'setup' (one of {list(scenes.SETUPS)}) places 'mesh:<file>' scenes only, got {entry!r}")
+    if "label" in entry and len(names_) * len(radii) != 1:
+        raise ParameterError(f"{where}: 'label' names one scene, not the {len(names_) * len(radii)} of {entry!r}")
+    out = []
+    for name in scenes.expand_names(names_):
+        for r in radii:
+            default = name + (f" {setup}" if setup else "") + ("" if r is None else f" r={r:g}")
+            out.append(SceneVariant(name, None if r is None else float(r), setup, entry.get("label", default)))
+    return out
+
+
+def _scene_names(entries: Any, where: str, variants: dict[str, SceneVariant]) -> list[str]:
+    """The scene labels of ``entries`` with ``generated:<first>..<last>``
+    written out and table entries expanded (each recorded in ``variants``),
+    each scene name known (:func:`penumbra.scenes.get`'s names)."""
     if not isinstance(entries, list):
         raise ParameterError(f"{where}: 'scenes' must be a list")
     unknown = []
+    out: list[str] = []
     for entry in entries:
         try:
-            scenes.expand_names([entry])
-        except ParameterError:
+            if isinstance(entry, dict):
+                found = _variants(entry, where)
+                variants.update((v.label, v) for v in found)
+                out += [v.label for v in found]
+            elif entry in variants:  # a [large] part naming a variant of the main part's
+                out.append(entry)
+            else:
+                out += scenes.expand_names([entry])
+        except ParameterError as e:
+            if isinstance(entry, dict) and "unknown scene" not in str(e) and "generated" not in str(e):
+                raise
             unknown.append(entry)
     if unknown:
         raise ParameterError(f"{where}: unknown scenes {unknown} (built-in: {scenes.names()}; from the shared meshes: {scenes.real_names()})")
-    return scenes.expand_names(entries)
+    return out
 
 
 def expand(grids: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:

@@ -24,6 +24,7 @@ __all__ = [
     "write_csv",
     "suite_tables",
     "what_to_use",
+    "markdown_table",
     "BUDGETS",
 ]
 
@@ -284,3 +285,27 @@ def what_to_use(rows: list[dict[str, Any]], budgets: Sequence[float] = BUDGETS) 
             out.append(f"| {budget:g} | {cells[0]} | {cells[1]} | {cells[2]} | {cells[3]} | {mitsuba} |")
         out.append("")
     return "\n".join(out)
+
+
+def _cell(value: Any) -> str:
+    if value is None or value == "":
+        return ""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return str(value)
+    if math.isnan(number):
+        return ""
+    return f"{number:.0f}" if number.is_integer() and abs(number) >= 1 else f"{number:.4g}"
+
+
+def markdown_table(rows: list[dict[str, Any]], columns: Sequence[str]) -> str:
+    """One line per row (scene, size, method, setting) with the given
+    ``results.csv`` columns (numbers to 4 significant digits; a column a row
+    lacks, such as a stat of another method, is left empty): a config's
+    ``table`` key, the study's own table."""
+    head = ["scene", "size", "method", "setting", *columns]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        lines.append("| " + " | ".join([str(r["scene"]), str(r["size"]), str(r["method"]), str(r["label"]), *(_cell(r.get(c)) for c in columns)]) + " |")
+    return "\n".join(lines) + "\n"

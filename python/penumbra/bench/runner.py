@@ -22,8 +22,8 @@ import numpy as np
 from penumbra import metrics, scenes
 from penumbra import mitsuba as pm
 from penumbra.bench.config import BenchConfig, expand, label
-from penumbra.bench.report import ERROR, aggregate, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, what_to_use, write_csv
-from penumbra.errors import ParameterError
+from penumbra.bench.report import ERROR, aggregate, markdown_table, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, what_to_use, write_csv
+from penumbra.errors import GpuFeatureError, ParameterError, SceneError
 from penumbra.grid import result_columns
 from penumbra.render import Renderer, RenderResult, methods
 from penumbra.scene import Scene
@@ -98,7 +98,7 @@ def parts(cfg: BenchConfig) -> list[Part]:
 def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: str, log: Callable[[str], None]) -> list[dict[str, Any]]:
     """Every configuration and peer of one scene of ``part``, each row with
     its time over Mitsuba's at the same error (see :func:`with_mitsuba_ratios`)."""
-    scene = scenes.get(scene_name, width=part.width, height=part.height)
+    scene = cfg.scene(scene_name, part.width, part.height)
     kinds = ["radiance", "visibility"] if cfg.radiance else ["visibility"]
     gt = pm.ground_truth(scene, spp=part.ground_truth_spp, noise_seed=1, kinds=kinds)
     size = f"{part.width}x{part.height}"
@@ -110,7 +110,13 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
     object_id = None
     rows: list[dict[str, Any]] = []
     for kind, method, params in configs:
-        result, passes, repeats = _median_render(renderer, scene, method, params, cfg)
+        try:
+            result, passes, repeats = _median_render(renderer, scene, method, params, cfg)
+        except (SceneError, GpuFeatureError) as e:
+            # A scene a method or setting refuses (a frustum over a wide floor, maps past the adapter's limits).
+            rows.append({"scene": scene_name, "size": size, "kind": "refused", "method": method, "label": label(params), "refused": str(e)})
+            log(f"{scene_name[:30]:30s} {method:9s} {label(params):40.40s} refused: {e}")
+            continue
         total = passes.pop("total")
         if method == "hard" and not params:
             hard_ms = total
@@ -163,7 +169,7 @@ def with_mitsuba_ratios(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     if not curve:
         return rows
     for r in rows:
-        if r["method"] == "mitsuba":
+        if r["method"] == "mitsuba" or r["kind"] == "refused":
             continue
         t, bound = time_at_error(curve, float(r[ERROR]))
         r["mitsuba_ms_at_equal_error"] = t
@@ -176,7 +182,8 @@ def with_mitsuba_ratios(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
 def _key(cfg: BenchConfig, part: Part, scene_name: str, commit: str) -> str:
     """What a cached scene's rows depend on: the commit, the scene, its part's
     size, truth, grids and peers, and the timing settings."""
-    text = json.dumps([commit, scene_name, part.width, part.height, part.ground_truth_spp, part.methods, part.peers,
+    variant = cfg.variants.get(scene_name)
+    text = json.dumps([commit, scene_name, repr(variant) if variant else None, part.width, part.height, part.ground_truth_spp, part.methods, part.peers,
                        cfg.repeats, cfg.warmup, cfg.max_seconds_per_config, cfg.radiance], sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
@@ -223,12 +230,18 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
             with open(cache, "a") as f:
                 f.write(json.dumps({"key": key, "rows": done[key]}, default=float) + "\n")
         rows += done[key]
+    refused = [r for r in rows if r["kind"] == "refused"]
+    rows = [r for r in rows if r["kind"] != "refused"]
+    if refused:
+        (out / "refused.md").write_text("".join(f"- {r['scene']} {r['size']} {r['method']} {r['label']}: {r['refused']}\n" for r in refused))
     write_csv(out / "results.csv", rows)
     main_rows = [r for r in rows if r["size"] == f"{cfg.size}x{cfg.size}"]
     summary = aggregate(main_rows)
     (out / "pareto.md").write_text(pareto_table(summary))
     (out / "ratios.md").write_text(ratio_tables(main_rows, summary))
     (out / "suite.md").write_text(suite_tables(rows) + "\n" + what_to_use(rows) + "\n" + MITSUBA_RULE[0].upper() + MITSUBA_RULE[1:] + ".\n")
+    if cfg.table:
+        (out / "table.md").write_text(markdown_table(rows, cfg.table))
     plot_pareto(summary, out / "pareto.png", f"{cfg.name}: {cfg.size}x{cfg.size}, medians over {len(cfg.scenes)} scene(s)")
     scaling_rows = run_scaling(cfg, renderer, log) if cfg.scaling else []
     if scaling_rows:
@@ -236,7 +249,8 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
         plot_scaling(scaling_rows, out / "scaling.png")
     (out / "machine.md").write_text(machine_description(renderer, cfg, time.perf_counter() - start, commit))
     log((out / "suite.md").read_text())
-    log(f"wrote {out}/results.csv, suite.md, pareto.png, pareto.md, ratios.md, machine.md" + (", scaling.csv, scaling.png" if scaling_rows else ""))
+    log(f"wrote {out}/results.csv, suite.md, pareto.png, pareto.md, ratios.md, machine.md" + (", scaling.csv, scaling.png" if scaling_rows else "")
+        + (", table.md" if cfg.table else ""))
     return rows
 
 
