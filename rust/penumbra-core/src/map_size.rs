@@ -22,7 +22,7 @@
 //! power of two and held to [`MIN_AUTO`, the adapter's largest texture side,
 //! [`MAX_AUTO`] or [`MAX_AUTO_CUBE`] per cube face].
 //!
-//! Not the default (`benchmarks/map_size.py`, docs/scaling.md): matching
+//! Not the default (`penumbra bench --config benchmarks/map_size.toml`, docs/scaling.md): matching
 //! texels to pixels removes the aliasing, and on the built-in scenes at
 //! 128x128 the maps it picks (256-512) are within the ground truth's noise of
 //! 2048 at a fraction of the time; but the methods' other errors scale with
@@ -38,7 +38,7 @@ use crate::scene::{Camera, PreparedScene};
 
 /// Texels per pixel along a side, on the receiver where they are densest
 /// relative to the pixels. 1 matches one texel to one pixel (the aliasing
-/// criterion); measured by `benchmarks/map_size.py` against maps of 2048
+/// criterion); measured by `penumbra bench --config benchmarks/map_size.toml` against maps of 2048
 /// (docs/scaling.md).
 pub const TEXELS_PER_PIXEL: f64 = 1.0;
 

@@ -92,7 +92,7 @@ pub fn uniform(binding: u32) -> wgpu::BindGroupLayoutEntry {
 /// them into `var<private>` once at the top of `main`: lavapipe gathers and
 /// bounds-checks every storage load and does not hoist them, which made
 /// `pcss` 2.2-2.7 times `hard` at 256x256 until the copy, 1.6-1.8 after
-/// (`benchmarks/method_table.py`; docs/stability.md).
+/// (`penumbra bench --config benchmarks/builtin.toml`; docs/stability.md).
 /// `tests/shader_validation.rs` keeps uniform buffers out of shaders that branch.
 pub fn parameters(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry { visibility: wgpu::ShaderStages::COMPUTE, ..storage_buffer(binding) }

@@ -37,7 +37,9 @@ pub const ACCELERATION_BUDGET: u64 = 512 << 20;
 const TLAS_ENTRIES: usize = 4;
 
 /// The size assumed for a BLAS per triangle where the allocator reports none
-/// (lavapipe's report: 104 bytes per triangle, `benchmarks/raytraced_memory.py`).
+/// (lavapipe's report: 104 bytes per triangle, the stats `acceleration_bytes`
+/// over `triangles` of `penumbra render --method raytraced --param n_samples=1`;
+/// docs/methods/raytraced.md).
 pub const ESTIMATED_BYTES_PER_TRIANGLE: u64 = 128;
 
 /// A mesh's content key: its object-space vertices (exact bits) and faces.
