@@ -20,7 +20,7 @@ use crate::pass_cache::CachedPass;
 use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
 use crate::gpu::formats;
-use crate::passes::shadow_map::{self, CENTRE_MAP};
+use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -104,7 +104,7 @@ impl Method for PercentageCloserFiltering {
 
     /// The filtered test per G-buffer pixel.
     fn record(&self, frame: &mut Frame<'_>, params: &PcfParams) -> Result<MethodOutput> {
-        let (map, projection) = shadow_map::centre_map(frame, &params.shadow)?;
+        let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
         let visibility = frame.ctx.screen_texture("pcf::visibility");
         frame.pass("visibility", |ctx, encoder, ts| {
             let test = ctx.parameters("pcf::shadow_test_uniforms", &params.shadow.uniform(&projection, ctx.light.center_f32, 0.0, 0));
