@@ -73,6 +73,11 @@ impl ParamSpec {
         Self { name, kind: ParamKind::Int { min, max }, default: ParamValue::Int(default), doc }
     }
 
+    /// `seed`: an integer in `[0, max]`, 0 by default, that fixes a method's jitter.
+    pub fn seed(max: i64, doc: &'static str) -> Self {
+        Self::int("seed", 0, 0, max, doc)
+    }
+
     /// `"auto"` or an integer in `[min, max]`, `default` by default.
     pub fn int_or_auto(name: &'static str, default: i64, min: i64, max: i64, doc: &'static str) -> Self {
         Self { name, kind: ParamKind::IntOrAuto { min, max }, default: ParamValue::Int(default), doc }

@@ -10,6 +10,7 @@ use glam::DVec3;
 
 use crate::error::Result;
 use crate::occluders::Occluders;
+use crate::params::ParamSpec;
 use crate::scene::{PreparedMesh, PreparedScene};
 use crate::topology::{ConnectivityStats, Part, Topology, NO_FACE, WELD_TOLERANCE};
 
@@ -30,6 +31,16 @@ pub enum OpenEdges {
 
 impl OpenEdges {
     pub const NAMES: [&'static str; 2] = ["silhouette", "error"];
+
+    /// The `open_edges` parameter of the silhouette methods.
+    pub fn spec() -> ParamSpec {
+        ParamSpec::choice(
+            "open_edges",
+            "silhouette",
+            &Self::NAMES,
+            "edges that are not two-sided (open and non-manifold meshes): silhouette edges where all their faces lie on one side of the plane through them and the light, or refuse such meshes",
+        )
+    }
 
     pub fn parse(name: &str) -> Self {
         if name == "silhouette" {

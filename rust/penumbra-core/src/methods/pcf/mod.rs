@@ -64,7 +64,7 @@ impl Method for PercentageCloserFiltering {
         specs.extend([
             ParamSpec::float("kernel", 5.0, 0.0, 256.0, "kernel width in shadow-map texels"),
             ParamSpec::int("samples", 4, 1, 32, "taps per axis of the jittered grid"),
-            ParamSpec::int("seed", 0, 0, u32::MAX as i64, "fixes the taps' jitter"),
+            ParamSpec::seed(u32::MAX as i64, "fixes the taps' jitter"),
             Filter::spec(),
         ]);
         specs

@@ -112,7 +112,7 @@ impl Method for PercentageCloserSoftShadows {
         specs.extend([
             ParamSpec::int("blocker_samples", 4, 1, 32, "taps per axis of the blocker search (at most 8 with 'poisson')"),
             ParamSpec::int("filter_samples", 6, 1, 32, "taps per axis of the filter (at most 8 with 'poisson')"),
-            ParamSpec::int("seed", 0, 0, u32::MAX as i64, "fixes the taps' rotation and jitter"),
+            ParamSpec::seed(u32::MAX as i64, "fixes the taps' rotation and jitter"),
             Filter::spec(),
             ParamSpec::choice("sampling", "grid", &Sampling::NAMES, "disk taps: a jittered grid, or a fixed Poisson-disk set"),
             ParamSpec::choice(

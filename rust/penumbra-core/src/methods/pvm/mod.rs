@@ -135,12 +135,7 @@ impl Method for PenumbraVolumeMaps {
         let mut specs = ShadowMapSettings::specs("slope");
         specs.extend([
             ParamSpec::bool("falloff", true, "the 3k^2 - 2k^3 interpolant of 4.2 (false: the disk fraction k)"),
-            ParamSpec::choice(
-                "open_edges",
-                "silhouette",
-                &OpenEdges::NAMES,
-                "edges that are not two-sided (open and non-manifold meshes): silhouette edges where all their faces lie on one side of the plane through them and the light, or refuse such meshes",
-            ),
+            OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
                 "all",

@@ -215,17 +215,12 @@ impl Method for PenumbraVolumeMaskFiltering {
             // more than 0.5 at r = 1e-5 (docs/connectivity.md); with 1 texel,
             // none.
             ParamSpec::float("blur_min_width", 1.0, 0.0, 1e6, "blur (5.3) only pixels whose filter w_pcf is at least this wide, in map texels (0: every filtered pixel, the paper's)"),
-            ParamSpec::int("seed", 0, 0, u32::MAX as i64, "fixes the filter's jitter"),
+            ParamSpec::seed(u32::MAX as i64, "fixes the filter's jitter"),
             Filter::spec(),
             ParamSpec::choice("offsets", "unit", &["unit", "radius"], "extrusion offsets of 5.1: unit vectors (the paper), or scaled by the light's radius"),
             ParamSpec::choice("kernel", "square", &["square", "disk"], "filter taps: the paper's square, or the disk the light projects to"),
             ParamSpec::choice("umbra", "filter", &["filter", "skip"], "pixels failing the test outside every volume: filter them (5.2) or give them 0"),
-            ParamSpec::choice(
-                "open_edges",
-                "silhouette",
-                &OpenEdges::NAMES,
-                "edges that are not two-sided (open and non-manifold meshes): silhouette edges where all their faces lie on one side of the plane through them and the light, or refuse such meshes",
-            ),
+            OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
                 "all",

@@ -126,7 +126,7 @@ impl Method for RaytracedShadows {
     fn specs() -> Vec<ParamSpec> {
         vec![
             ParamSpec::int("n_samples", 256, 1, 65536, "shadow rays per pixel, one per light sample of reference's sphere sampling (rounded up to full stratified grids)"),
-            ParamSpec::int("seed", 0, 0, i64::MAX, "fixes the samples' jitter"),
+            ParamSpec::seed(i64::MAX, "fixes the samples' jitter"),
             ParamSpec::bool("adaptive", false, "a few rays per pixel first, the full count only where they disagree within adaptive_radius pixels"),
             ParamSpec::int("adaptive_samples", 16, 1, 4096, "adaptive mode: rays per pixel of the first pass, to the light's disk facing the pixel (rounded up to a full grid of ceil(sqrt(n)) columns; fewer than n_samples)"),
             ParamSpec::int("adaptive_radius", 2, 0, 16, "adaptive mode: a pixel takes the full count when any pixel this close disagreed"),

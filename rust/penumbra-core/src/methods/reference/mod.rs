@@ -110,7 +110,7 @@ impl Method for ReferenceShadows {
         let mut specs = ShadowMapSettings::specs("slope");
         specs.extend([
             ParamSpec::int("n_samples", 256, 1, 4096, "light samples (rounded up to a full stratified grid)"),
-            ParamSpec::int("seed", 0, 0, i64::MAX, "fixes the samples' jitter"),
+            ParamSpec::seed(i64::MAX, "fixes the samples' jitter"),
             ParamSpec::choice(
                 "sampling",
                 "sphere",

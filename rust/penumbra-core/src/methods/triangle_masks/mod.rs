@@ -172,7 +172,7 @@ impl Method for TriangleMasks {
     fn specs() -> Vec<ParamSpec> {
         vec![
             ParamSpec::int("n_samples", 256, 1, 4096, "light samples of reference's sphere sampling, one mask bit each (rounded up to full stratified grids)"),
-            ParamSpec::int("seed", 0, 0, i64::MAX, "fixes the samples' jitter"),
+            ParamSpec::seed(i64::MAX, "fixes the samples' jitter"),
             ParamSpec::float(
                 "ray_offset",
                 DEFAULT_RAY_OFFSET,

@@ -185,12 +185,7 @@ impl Method for PenumbraWedges {
                 "separate objects (connected surfaces, however many meshes they come in) whose penumbrae overlap: every wedge's term summed with the hard shadow, as both papers, or each object's terms summed alone, its visible fraction taken, and the objects' fractions multiplied as independent occluders (worse at the median of the generated scenes, better in their worst case: docs/methods/wedges.md)",
             ),
             ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
-            ParamSpec::choice(
-                "open_edges",
-                "silhouette",
-                &OpenEdges::NAMES,
-                "edges that are not two-sided (open and non-manifold meshes): silhouette edges where all their faces lie on one side of the plane through them and the light (as pvm), or refuse such meshes",
-            ),
+            OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
                 "all",
