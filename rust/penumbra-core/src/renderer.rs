@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::frame::{Frame, FrameContext};
-use crate::gpu::pool::{PoolStats, ResourcePool};
+use crate::gpu::pool::{PoolStats, PooledTexture, ResourcePool};
 use crate::gpu::readback::{self, PendingReadback};
 use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
 use crate::method::DynMethod;
@@ -251,6 +251,9 @@ impl Renderer {
         Ok(result)
     }
 
+    /// One render inside the device's error scope: the G-buffer, the method
+    /// (its map size resolved first when asked for `"auto"`), shading, and
+    /// the readback of what `options` asks for.
     fn record_and_read(
         &self,
         scene: &Scene,
@@ -259,7 +262,35 @@ impl Renderer {
         options: &RenderOptions,
         prepared: &PreparedScene,
         chosen_map_size: &std::cell::Cell<Option<u32>>,
-    ) -> Result<(RenderResult, Vec<(&'static str, PassKey, crate::pass_cache::Entry)>)> {
+    ) -> Result<(RenderResult, FreshPasses)> {
+        let mut frame = self.begin_frame(scene, camera, prepared, options.intermediates)?;
+        let resolved = Self::resolve_map_size(&mut frame, method, chosen_map_size)?;
+        let method = resolved.as_ref().unwrap_or(method);
+        let output = self.method(method.index()).record(&mut frame, method.typed())?;
+        let radiance = self.shade(&mut frame, &output.visibility, options.outputs)?;
+        let gbuffer = frame.ctx.gbuffer.clone();
+        let mut record = frame.into_record();
+        let mut stats = BTreeMap::from([
+            ("triangles".to_owned(), prepared.triangle_count as i64),
+            ("degenerate_triangles".to_owned(), prepared.degenerate_triangles as i64),
+            ("pass_cache".to_owned(), i64::from(self.cache.enabled())),
+        ]);
+        stats.extend(std::mem::take(&mut record.stats));
+        // What was reused: a count, and a flag for each cacheable pass this method has.
+        let cacheable = std::iter::once(&GBUFFER).chain((REGISTRY[method.index()].cached_passes)());
+        for pass in cacheable {
+            stats.insert(format!("reused_{}", pass.name), i64::from(record.reused.contains(&pass.name)));
+        }
+        stats.insert("reused_passes".into(), record.reused.len() as i64);
+        let targets = Targets { radiance: radiance.as_ref().map(|r| &r.resource.texture), visibility: &output.visibility, gbuffer: &gbuffer };
+        let (images, timings, fresh) = self.read_back(record, targets, options.outputs, prepared, &mut stats)?;
+        let result = RenderResult { method: method.name(), params: method.effective_params(), images, timings, total_ms: 0.0, stats };
+        Ok((result, fresh))
+    }
+
+    /// The frame of one render, with its G-buffer drawn or reused from the
+    /// pass cache (keyed by the geometry, the camera's matrices and the size).
+    fn begin_frame<'r>(&'r self, scene: &'r Scene, camera: &'r Camera, prepared: &'r PreparedScene, intermediates: bool) -> Result<Frame<'r>> {
         let device = &self.ctx.device;
         let size = (camera.width, camera.height);
         let (projection, _, _) = camera.projection(prepared.bounds_min, prepared.bounds_max);
@@ -267,7 +298,6 @@ impl Renderer {
         // Pass-cache keys (crate::pass_cache): the geometry is hashed once, and
         // only when there is a cache to look in.
         let geometry = if self.cache.enabled() { crate::pass_cache::geometry_hash(prepared) } else { 0 }.to_le_bytes();
-        // The G-buffer reads the geometry and the camera's matrices and size.
         let gbuffer_key = PassKey::new(GBUFFER.name)
             .bytes(&geometry)
             .f32s(&view.to_cols_array())
@@ -288,58 +318,54 @@ impl Renderer {
             (gbuffer.clone(), gbuffer_key.clone()),
             geometry,
         );
-        let mut frame = Frame::new(ctx, Profiler::new(&self.ctx, &self.pool, self.use_timestamps), &self.cache, options.intermediates);
+        let mut frame = Frame::new(ctx, Profiler::new(&self.ctx, &self.pool, self.use_timestamps), &self.cache, intermediates);
         if cached_gbuffer.is_some() {
             frame.reused(GBUFFER.name);
         } else {
             frame.pass(GBUFFER.name, |ctx, encoder, ts| self.gbuffer.record(ctx, encoder, view, projection, ts))?;
             frame.fresh(GBUFFER.name, gbuffer_key, gbuffer);
         }
-        // map_size="auto" (the default): the size from the image, for the
-        // projection the method's maps use.
-        let resolved;
-        let method = match method.auto_map_size() {
-            Some(mode) => {
-                let projection = frame.ctx.projection(mode)?;
-                let map_size = crate::map_size::auto_map_size(&projection, camera, prepared, frame.ctx.max_texture_side());
-                chosen_map_size.set(Some(map_size));
-                resolved = method.with_map_size(map_size)?;
-                frame.stat("map_size_auto", 1);
-                &resolved
-            }
-            None => method,
-        };
-        let output = self.method(method.index()).record(&mut frame, method.typed())?;
-        // Shading only where radiance is asked for.
-        let outputs = options.outputs;
-        let radiance = if outputs.has("radiance") {
-            let radiance = frame.ctx.texture(
-                "renderer::radiance",
-                size,
-                formats::RADIANCE,
-                wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-            );
-            frame.pass("shading", |ctx, encoder, ts| self.shading.record(ctx, encoder, &output.visibility, &radiance, ts))?;
-            Some(radiance)
-        } else {
-            None
-        };
-        let gbuffer = frame.ctx.gbuffer.clone();
-        let record = frame.into_record();
+        Ok(frame)
+    }
 
-        let mut stats = BTreeMap::from([
-            ("triangles".to_owned(), prepared.triangle_count as i64),
-            ("degenerate_triangles".to_owned(), prepared.degenerate_triangles as i64),
-            ("pass_cache".to_owned(), i64::from(self.cache.enabled())),
-        ]);
-        stats.extend(record.stats);
-        // What was reused: a count, and a flag for each cacheable pass this method has.
-        let cacheable = std::iter::once(&GBUFFER).chain((crate::methods::REGISTRY[method.index()].cached_passes)());
-        for pass in cacheable {
-            stats.insert(format!("reused_{}", pass.name), i64::from(record.reused.contains(&pass.name)));
+    /// `map_size="auto"` (the default): the method's configuration with the
+    /// size chosen from the image for the projection its maps use
+    /// ([`crate::map_size`]); None when the size was given.
+    fn resolve_map_size(frame: &mut Frame<'_>, method: &MethodConfig, chosen: &std::cell::Cell<Option<u32>>) -> Result<Option<MethodConfig>> {
+        let Some(mode) = method.auto_map_size() else { return Ok(None) };
+        let projection = frame.ctx.projection(mode)?;
+        let map_size = crate::map_size::auto_map_size(&projection, frame.ctx.camera, frame.ctx.prepared, frame.ctx.max_texture_side());
+        chosen.set(Some(map_size));
+        frame.stat("map_size_auto", 1);
+        method.with_map_size(map_size).map(Some)
+    }
+
+    /// Shading (SPEC section 3) of the method's visibility, only where
+    /// radiance is asked for.
+    fn shade(&self, frame: &mut Frame<'_>, visibility: &PooledTexture, outputs: Outputs) -> Result<Option<PooledTexture>> {
+        if !outputs.has("radiance") {
+            return Ok(None);
         }
-        stats.insert("reused_passes".into(), record.reused.len() as i64);
+        let usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
+        let radiance = frame.ctx.texture("renderer::radiance", frame.ctx.size, formats::RADIANCE, usage);
+        frame.pass("shading", |ctx, encoder, ts| self.shading.record(ctx, encoder, visibility, &radiance, ts))?;
+        Ok(Some(radiance))
+    }
 
+    /// Copies what `outputs` asks for (and the frame's counters, intermediates
+    /// and timestamps) into readback buffers, submits and waits once, and
+    /// unpacks them into images and stats. Returns the images, the timings and
+    /// the fresh pass outputs for the pass cache.
+    fn read_back(
+        &self,
+        record: crate::frame::FrameRecord<'_>,
+        targets: Targets<'_>,
+        outputs: Outputs,
+        prepared: &PreparedScene,
+        stats: &mut BTreeMap<String, i64>,
+    ) -> Result<(Vec<Image>, Timings, FreshPasses)> {
+        let device = &self.ctx.device;
+        let size = targets.gbuffer.size;
         let (profile, mut encoder, timestamps) = record.profiler.finish()?;
         let uses_timestamps = timestamps.is_some();
         let mut readback_start = Instant::now();
@@ -352,17 +378,17 @@ impl Renderer {
             outputs.has("normal") || outputs.has("object_id"),
         );
         let mut pending: Vec<PendingReadback> = Vec::new();
-        if let Some(radiance) = &radiance {
+        if let Some(radiance) = targets.radiance {
             pending.push(copy(&mut encoder, radiance, all));
         }
         if outputs.has("visibility") {
-            pending.push(copy(&mut encoder, &output.visibility, all));
+            pending.push(copy(&mut encoder, targets.visibility, all));
         }
         if want_position {
-            pending.push(copy(&mut encoder, &gbuffer.position, all));
+            pending.push(copy(&mut encoder, &targets.gbuffer.position, all));
         }
         if want_normal {
-            pending.push(copy(&mut encoder, &gbuffer.normal, all));
+            pending.push(copy(&mut encoder, &targets.gbuffer.normal, all));
         }
         for (buffer, names) in &record.counters {
             pending.push(readback::copy_buffer(device, &self.pool, &mut encoder, buffer, 4 * names.len() as u32));
@@ -384,16 +410,13 @@ impl Renderer {
         }
         let mut all = readback::read_all(&pending)?;
         let ticks = if has_timestamps { all.pop() } else { None };
-        let timings = profile.timings(ticks);
+        let mut timings = profile.timings(ticks);
         let mut bytes = all.into_iter();
-        // Submitted and waited for: what ran may be reused once the error
-        // scope shows the render free of GPU errors (`render`).
-        let fresh = record.fresh;
         let mut next = || readback::cast_vec::<f32>(bytes.next().unwrap_or_default());
         let (w, h) = (size.0 as usize, size.1 as usize);
         let mut images = Vec::new();
         let rgb = |texels: &[f32]| texels.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]]).collect::<Vec<f32>>();
-        if radiance.is_some() {
+        if targets.radiance.is_some() {
             images.push(Image { name: "radiance".into(), shape: vec![h, w, 3], data: ImageData::F32(rgb(&next())) });
         }
         if outputs.has("visibility") {
@@ -431,30 +454,41 @@ impl Renderer {
             }
         }
         for i in &record.intermediates {
-            let raw = readback::cast_vec::<f32>(bytes.next().unwrap_or_default());
-            let (w, h, layers) = (i.texture.width() as usize, i.texture.height() as usize, i.texture.depth_or_array_layers() as usize);
-            let stored = raw.len() / (w * h * layers).max(1);
-            let mut data: Vec<f32> = if stored == i.channels {
-                raw
-            } else {
-                raw.chunks_exact(stored).flat_map(|t| t[..i.channels].to_vec()).collect()
-            };
-            if i.scale != 1.0 {
-                // A linear-depth map stores depth / far: hand back world-unit light depth.
-                data.iter_mut().for_each(|d| *d *= i.scale);
-            }
-            let mut shape = if i.channels == 1 { vec![h, w] } else { vec![h, w, i.channels] };
-            if layers > 1 {
-                shape.insert(0, layers);
-            }
-            images.push(Image { name: i.name.into(), shape, data: ImageData::F32(data) });
+            images.push(intermediate_image(i, readback::cast_vec::<f32>(bytes.next().unwrap_or_default())));
         }
-        let mut timings = timings;
         timings.passes.push(("readback".into(), readback_start.elapsed().as_secs_f64() * 1e3));
         drop(record.held);
-        let result = RenderResult { method: method.name(), params: method.effective_params(), images, timings, total_ms: 0.0, stats };
-        Ok((result, fresh))
+        // Submitted and waited for: what ran may be reused once the error
+        // scope shows the render free of GPU errors (`render`).
+        Ok((images, timings, record.fresh))
     }
+}
+
+/// Outputs of cacheable passes that ran in a render: cached once it succeeded.
+type FreshPasses = Vec<(&'static str, PassKey, crate::pass_cache::Entry)>;
+
+/// The images a render reads back besides the frame's own.
+struct Targets<'a> {
+    radiance: Option<&'a wgpu::Texture>,
+    visibility: &'a wgpu::Texture,
+    gbuffer: &'a GBuffer,
+}
+
+/// A method's intermediate image from its texels as read back: the channels
+/// it keeps, depth scaled to world units, a leading axis for several layers.
+fn intermediate_image(i: &crate::frame::Intermediate, raw: Vec<f32>) -> Image {
+    let (w, h, layers) = (i.texture.width() as usize, i.texture.height() as usize, i.texture.depth_or_array_layers() as usize);
+    let stored = raw.len() / (w * h * layers).max(1);
+    let mut data: Vec<f32> = if stored == i.channels { raw } else { raw.chunks_exact(stored).flat_map(|t| t[..i.channels].to_vec()).collect() };
+    if i.scale != 1.0 {
+        // A linear-depth map stores depth / far: hand back world-unit light depth.
+        data.iter_mut().for_each(|d| *d *= i.scale);
+    }
+    let mut shape = if i.channels == 1 { vec![h, w] } else { vec![h, w, i.channels] };
+    if layers > 1 {
+        shape.insert(0, layers);
+    }
+    Image { name: i.name.into(), shape, data: ImageData::F32(data) }
 }
 
 /// Bytes of one shadow-map face (`gpu::formats::DEPTH`, 32-bit depth).
