@@ -6,7 +6,7 @@
 //! visibility the method returns and reads back what was asked.
 
 use std::collections::BTreeMap;
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use crate::error::{Error, Result};
@@ -14,7 +14,7 @@ use crate::frame::{Frame, FrameContext};
 use crate::gpu::pool::{PoolStats, PooledTexture, ResourcePool};
 use crate::gpu::readback::{self, PendingReadback};
 use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
-use crate::method::DynMethod;
+use crate::method::{DynMethod, Registered};
 use crate::methods::{MethodConfig, REGISTRY};
 use crate::params::ParamValue;
 use crate::pass_cache::{CachedPass, PassCache, PassKey};
@@ -131,8 +131,8 @@ pub struct Renderer {
     shading: ShadingPass,
     /// Topology and silhouettes, cached by mesh content and light centre.
     silhouettes: SilhouetteCache,
-    /// One per registry entry, built on its first render.
-    methods: Vec<OnceLock<Box<dyn DynMethod>>>,
+    /// Each method rendered so far, by its registry entry, built on its first render.
+    methods: Mutex<Vec<(&'static Registered, Arc<dyn DynMethod>)>>,
     cache: PassCache,
 }
 
@@ -159,7 +159,7 @@ impl Renderer {
             ComparisonSamplers::shared(device, &pool);
             Ok((GBufferPass::new(device, &pool), ShadingPass::new(device, &pool)))
         })?;
-        let methods = REGISTRY.iter().map(|_| OnceLock::new()).collect();
+        let methods = Mutex::default();
         let cache = PassCache::new(pass_cache, cached_passes());
         Ok(Self { ctx, use_timestamps, pool, gbuffer, shading, silhouettes: SilhouetteCache::default(), methods, cache })
     }
@@ -199,8 +199,15 @@ impl Renderer {
         self.use_timestamps && self.ctx.has_timestamps()
     }
 
-    fn method(&self, index: usize) -> &dyn DynMethod {
-        &**self.methods[index].get_or_init(|| (REGISTRY[index].build)(&self.ctx.device, &self.pool))
+    /// The built method of `entry` (its pipelines built on its first render).
+    fn method(&self, entry: &'static Registered) -> Arc<dyn DynMethod> {
+        let mut methods = self.methods.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, built)) = methods.iter().find(|(e, _)| std::ptr::eq(*e, entry)) {
+            return built.clone();
+        }
+        let built: Arc<dyn DynMethod> = Arc::from((entry.build)(&self.ctx.device, &self.pool));
+        methods.push((entry, built.clone()));
+        built
     }
 
     pub fn render(&self, scene: &Scene, camera: &Camera, method: &MethodConfig, options: &RenderOptions) -> Result<RenderResult> {
@@ -266,7 +273,7 @@ impl Renderer {
         let mut frame = self.begin_frame(scene, camera, prepared, options.intermediates)?;
         let resolved = Self::resolve_map_size(&mut frame, method, chosen_map_size)?;
         let method = resolved.as_ref().unwrap_or(method);
-        let output = self.method(method.index()).record(&mut frame, method.typed())?;
+        let output = self.method(method.entry()).record(&mut frame, method.typed())?;
         let radiance = self.shade(&mut frame, &output.visibility, options.outputs)?;
         let gbuffer = frame.ctx.gbuffer.clone();
         let mut record = frame.into_record();
@@ -277,7 +284,7 @@ impl Renderer {
         ]);
         stats.extend(std::mem::take(&mut record.stats));
         // What was reused: a count, and a flag for each cacheable pass this method has.
-        let cacheable = std::iter::once(&GBUFFER).chain((REGISTRY[method.index()].cached_passes)());
+        let cacheable = std::iter::once(&GBUFFER).chain((method.entry().cached_passes)());
         for pass in cacheable {
             stats.insert(format!("reused_{}", pass.name), i64::from(record.reused.contains(&pass.name)));
         }

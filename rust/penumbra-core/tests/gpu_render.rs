@@ -92,3 +92,85 @@ fn bad_parameters_are_typed_errors() {
     }
     assert!(MethodConfig::parse("nope", &BTreeMap::new()).unwrap_err().to_string().contains("unknown method"));
 }
+
+/// A method defined outside the crate, as docs/architecture.md describes
+/// adding one: a type behind the `Method` trait, its WGSL (here a string, as
+/// it is in no `src/` folder), and a registry entry (`method::entry`), here
+/// handed to `MethodConfig::of` rather than listed in `methods::REGISTRY`.
+/// It sees half the light on every surface.
+mod half_light {
+    use penumbra_core::frame::Frame;
+    use penumbra_core::gpu::pool::{Binding, ResourcePool};
+    use penumbra_core::gpu::{formats, layout};
+    use penumbra_core::method::{Method, MethodOutput};
+    use penumbra_core::params::{ParamSet, ParamSpec};
+    use penumbra_core::passes::screen::ScreenPass;
+    use penumbra_core::Result;
+
+    const WGSL: &str = "
+@group(0) @binding(2) var visibility_out: texture_storage_2d<r32float, write>;
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let pixel = screen_pixel(id);
+    if (pixel.inside) {
+        textureStore(visibility_out, pixel.px, vec4<f32>(select(0.0, 0.5, pixel.geometry), 0.0, 0.0, 0.0));
+    }
+}
+";
+
+    pub struct HalfLight {
+        visibility: ScreenPass,
+    }
+
+    impl Method for HalfLight {
+        const NAME: &'static str = "half_light";
+        const PAPER: &'static str = "a test of the method interface";
+        type Params = f64;
+
+        fn specs() -> Vec<ParamSpec> {
+            vec![ParamSpec::float("unused", 1.0, 0.0, 2.0, "a parameter it declares and ignores")]
+        }
+
+        fn params(set: &ParamSet) -> Result<f64> {
+            Ok(set.float("unused"))
+        }
+
+        fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
+            let source = format!("{}\n{WGSL}", penumbra_core::shaders::compose("shaders/receiver.wgsl"));
+            let storage = |b| layout::storage_texture(b, formats::VISIBILITY);
+            Self { visibility: ScreenPass::new(device, pool, "half_light::visibility", source, &[storage], &["main"]) }
+        }
+
+        fn record(&self, frame: &mut Frame<'_>, _: &f64) -> Result<MethodOutput> {
+            let visibility = frame.ctx.screen_texture("half_light::visibility");
+            frame.pass("visibility", |ctx, encoder, ts| self.visibility.run(ctx, encoder, &[Binding::Texture(&visibility)], ts))?;
+            frame.stat("half_light_renders", 1);
+            Ok(MethodOutput { visibility })
+        }
+    }
+}
+
+#[test]
+fn a_method_outside_the_registry_renders_through_the_same_trait() {
+    static HALF_LIGHT: penumbra_core::method::Registered = penumbra_core::method::entry::<half_light::HalfLight>();
+    let Some(r) = renderer() else { return };
+    let scene = Scene { meshes: vec![plane(4.0)], light: SphereLight { center: [0.0, 5.0, 0.0], radius: 0.5, intensity: [10.0; 3] }, ambient: [0.0; 3] };
+    let config = MethodConfig::of(&HALF_LIGHT, &BTreeMap::new()).unwrap();
+    assert_eq!(config.name(), "half_light");
+    assert!(MethodConfig::of(&HALF_LIGHT, &BTreeMap::from([("unused".to_owned(), ParamValue::Float(3.0))])).is_err());
+    for _ in 0..2 {
+        let result = r.render(&scene, &camera(32), &config, &RenderOptions::default()).unwrap();
+        let vis = result.image("visibility").unwrap().f32().unwrap();
+        let ids = match &result.image("object_id").unwrap().data {
+            penumbra_core::ImageData::I32(v) => v.clone(),
+            _ => unreachable!(),
+        };
+        assert!(ids.iter().any(|&i| i == 0) && ids.iter().any(|&i| i < 0));
+        for (v, id) in vis.iter().zip(&ids) {
+            assert_eq!(*v, if *id >= 0 { 0.5 } else { 0.0 });
+        }
+        assert_eq!(result.stats["half_light_renders"], 1);
+        assert_eq!(result.method, "half_light");
+    }
+}

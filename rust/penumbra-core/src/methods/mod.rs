@@ -63,26 +63,33 @@ pub fn registered(name: &str) -> Result<(usize, &'static Registered)> {
 /// A method with its checked parameters.
 #[derive(Clone)]
 pub struct MethodConfig {
-    index: usize,
+    entry: &'static Registered,
     set: ParamSet,
     typed: Arc<dyn Any + Send + Sync>,
 }
 
 impl MethodConfig {
+    /// A registered method (by name) with `params` checked against its specs.
     pub fn parse(method: &str, params: &BTreeMap<String, ParamValue>) -> Result<Self> {
-        let (index, entry) = registered(method)?;
-        let set = ParamSet::parse(method, &(entry.specs)(), params)?;
+        Self::of(registered(method)?.1, params)
+    }
+
+    /// The method of registry entry `entry` (`method::entry::<M>()`, in
+    /// [`REGISTRY`] or not: a method a crate defines outside it renders
+    /// alike) with `params` checked against its specs.
+    pub fn of(entry: &'static Registered, params: &BTreeMap<String, ParamValue>) -> Result<Self> {
+        let set = ParamSet::parse(entry.name, &(entry.specs)(), params)?;
         let typed = (entry.parse)(&set)?;
-        Ok(Self { index, set, typed })
+        Ok(Self { entry, set, typed })
     }
 
     pub fn name(&self) -> &'static str {
-        REGISTRY[self.index].name
+        self.entry.name
     }
 
-    /// The index of the method in [`REGISTRY`].
-    pub fn index(&self) -> usize {
-        self.index
+    /// The method's registry entry.
+    pub fn entry(&self) -> &'static Registered {
+        self.entry
     }
 
     /// The parameters in effect, defaults included, for the result's record.
@@ -102,8 +109,8 @@ impl MethodConfig {
     /// effective parameters keep what was asked: `"auto"`).
     pub fn with_map_size(&self, map_size: u32) -> Result<Self> {
         let set = self.set.with("map_size", ParamValue::Int(map_size as i64));
-        let typed = (REGISTRY[self.index].parse)(&set)?;
-        Ok(Self { index: self.index, set: self.set.clone(), typed })
+        let typed = (self.entry.parse)(&set)?;
+        Ok(Self { entry: self.entry, set: self.set.clone(), typed })
     }
 
     pub(crate) fn typed(&self) -> &(dyn Any + Send + Sync) {
@@ -119,7 +126,7 @@ impl fmt::Debug for MethodConfig {
 
 impl PartialEq for MethodConfig {
     fn eq(&self, other: &Self) -> bool {
-        self.index == other.index && self.set == other.set
+        std::ptr::eq(self.entry, other.entry) && self.set == other.set
     }
 }
 
