@@ -402,7 +402,7 @@ fn adapter_info(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     summary_dict(py, &summary)
 }
 
-/// Every method name of SPEC section 4 with whether it is implemented.
+/// Every registered method name with whether it is implemented (all are).
 #[pyfunction]
 fn methods(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     PyList::new(py, core::methods())
