@@ -50,8 +50,10 @@ pub enum ParamKind {
     Bool,
     /// An integer in `[min, max]`.
     Int { min: i64, max: i64 },
-    /// `"auto"` (the value is chosen per render) or an integer in `[min, max]`.
-    IntOrAuto { min: i64, max: i64 },
+    /// A shadow map's side in texels, an integer in `[min, max]`, or
+    /// `"auto"`: the renderer chooses it per render from the image
+    /// (`crate::map_size`; `MethodConfig::auto_map_size` finds it by this kind).
+    MapSize { min: i64, max: i64 },
     /// A finite number in `[min, max]`, or `(min, max]` when `min_exclusive`.
     Float { min: f64, max: f64, min_exclusive: bool },
     /// One of the names.
@@ -78,9 +80,10 @@ impl ParamSpec {
         Self::int("seed", 0, 0, max, doc)
     }
 
-    /// `"auto"` or an integer in `[min, max]`, `default` by default.
-    pub fn int_or_auto(name: &'static str, default: i64, min: i64, max: i64, doc: &'static str) -> Self {
-        Self { name, kind: ParamKind::IntOrAuto { min, max }, default: ParamValue::Int(default), doc }
+    /// A shadow map's side (`ParamKind::MapSize`): `"auto"` or an integer in
+    /// `[min, max]`, `default` by default.
+    pub fn map_size(name: &'static str, default: i64, min: i64, max: i64, doc: &'static str) -> Self {
+        Self { name, kind: ParamKind::MapSize { min, max }, default: ParamValue::Int(default), doc }
     }
 
     pub fn float(name: &'static str, default: f64, min: f64, max: f64, doc: &'static str) -> Self {
@@ -112,7 +115,7 @@ impl ParamSpec {
         match &self.kind {
             ParamKind::Bool => "a bool".into(),
             ParamKind::Int { min, max } => format!("an integer in [{min}, {max}]"),
-            ParamKind::IntOrAuto { min, max } => format!("'{AUTO}' or an integer in [{min}, {max}]"),
+            ParamKind::MapSize { min, max } => format!("'{AUTO}' or an integer in [{min}, {max}]"),
             ParamKind::Float { min, max, min_exclusive: false } => format!("a number in [{min}, {max}]"),
             ParamKind::Float { min, max, min_exclusive: true } => format!("a number in ({min}, {max}]"),
             ParamKind::Choice(choices) => {
@@ -135,8 +138,8 @@ impl ParamSpec {
         };
         let out = match (&self.kind, value) {
             (ParamKind::Bool, ParamValue::Bool(_)) => value.clone(),
-            (ParamKind::IntOrAuto { .. }, ParamValue::Str(s)) if s == AUTO => value.clone(),
-            (ParamKind::Int { min, max } | ParamKind::IntOrAuto { min, max }, ParamValue::Int(v)) => {
+            (ParamKind::MapSize { .. }, ParamValue::Str(s)) if s == AUTO => value.clone(),
+            (ParamKind::Int { min, max } | ParamKind::MapSize { min, max }, ParamValue::Int(v)) => {
                 if v < min || v > max {
                     return Err(wrong());
                 }
@@ -304,8 +307,8 @@ mod tests {
     }
 
     #[test]
-    fn an_int_or_auto_takes_auto_or_an_integer_in_range() {
-        let specs = vec![ParamSpec::int_or_auto("map_size", 2048, 16, 16384, "size")];
+    fn a_map_size_takes_auto_or_an_integer_in_range() {
+        let specs = vec![ParamSpec::map_size("map_size", 2048, 16, 16384, "size")];
         let set = ParamSet::parse("m", &specs, &given(&[])).unwrap();
         assert_eq!(set.int_or_auto("map_size"), Some(2048));
         let auto = ParamSet::parse("m", &specs, &given(&[("map_size", ParamValue::Str("auto".into()))])).unwrap();

@@ -339,12 +339,12 @@ impl Renderer {
     /// size chosen from the image for the projection its maps use
     /// ([`crate::map_size`]); None when the size was given.
     fn resolve_map_size(frame: &mut Frame<'_>, method: &MethodConfig, chosen: &std::cell::Cell<Option<u32>>) -> Result<Option<MethodConfig>> {
-        let Some(mode) = method.auto_map_size() else { return Ok(None) };
+        let Some((name, mode)) = method.auto_map_size() else { return Ok(None) };
         let projection = frame.ctx.projection(mode)?;
         let map_size = crate::map_size::auto_map_size(&projection, frame.ctx.camera, frame.ctx.prepared, frame.ctx.max_texture_side());
         chosen.set(Some(map_size));
         frame.stat("map_size_auto", 1);
-        method.with_map_size(map_size).map(Some)
+        method.with_map_size(name, map_size).map(Some)
     }
 
     /// Shading (SPEC section 3) of the method's visibility, only where

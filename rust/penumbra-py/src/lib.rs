@@ -431,7 +431,7 @@ fn method_specs(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
                     p.set_item("minimum", min)?;
                     p.set_item("maximum", max)?;
                 }
-                core::ParamKind::IntOrAuto { min, max } => {
+                core::ParamKind::MapSize { min, max } => {
                     // An integer parameter that also takes "auto".
                     p.set_item("type", "int")?;
                     p.set_item("minimum", min)?;

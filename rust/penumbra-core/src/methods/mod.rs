@@ -10,7 +10,7 @@ use std::any::Any;
 
 use crate::error::{Error, Result};
 use crate::method::{entry, Registered};
-use crate::params::{ParamSet, ParamValue};
+use crate::params::{ParamKind, ParamSet, ParamValue};
 
 pub mod adaptive;
 pub mod backprojection;
@@ -91,18 +91,20 @@ impl MethodConfig {
         self.set.effective()
     }
 
-    /// The projection mode of a shadow map whose `map_size` is `"auto"`:
-    /// the renderer then resolves the size ([`crate::map_size`]) with
-    /// [`Self::with_map_size`] before the method records.
-    pub fn auto_map_size(&self) -> Option<crate::light_frustum::ProjectionMode> {
-        let auto = self.set.has("map_size") && self.set.int_or_auto("map_size").is_none();
-        auto.then(|| crate::light_frustum::ProjectionMode::parse(self.set.choice("projection")))
+    /// The parameter of kind [`ParamKind::MapSize`] set to `"auto"`, if
+    /// any, and the projection its maps use (the method's `projection`, else
+    /// `auto`): the renderer then resolves the size ([`crate::map_size`])
+    /// with [`Self::with_map_size`] before the method records.
+    pub fn auto_map_size(&self) -> Option<(&'static str, crate::light_frustum::ProjectionMode)> {
+        let spec = (self.entry.specs)().into_iter().find(|s| matches!(s.kind, ParamKind::MapSize { .. }) && self.set.int_or_auto(s.name).is_none())?;
+        let projection = if self.set.has("projection") { self.set.choice("projection") } else { "auto" };
+        Some((spec.name, crate::light_frustum::ProjectionMode::parse(projection)))
     }
 
-    /// This configuration with `map_size` set to `map_size` texels (the
-    /// effective parameters keep what was asked: `"auto"`).
-    pub fn with_map_size(&self, map_size: u32) -> Result<Self> {
-        let set = self.set.with("map_size", ParamValue::Int(map_size as i64));
+    /// This configuration with map-size parameter `name` set to `map_size`
+    /// texels (the effective parameters keep what was asked: `"auto"`).
+    pub fn with_map_size(&self, name: &'static str, map_size: u32) -> Result<Self> {
+        let set = self.set.with(name, ParamValue::Int(map_size as i64));
         let typed = (self.entry.parse)(&set)?;
         Ok(Self { entry: self.entry, set: self.set.clone(), typed })
     }

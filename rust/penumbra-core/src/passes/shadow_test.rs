@@ -79,7 +79,7 @@ impl ShadowMapSettings {
     /// [`BiasMode::NAMES`]).
     pub fn specs(default_bias: &'static str) -> Vec<ParamSpec> {
         vec![
-            ParamSpec::int_or_auto(
+            ParamSpec::map_size(
                 "map_size",
                 2048,
                 16,

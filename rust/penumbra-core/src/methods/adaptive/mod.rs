@@ -360,7 +360,7 @@ impl Method for AdaptiveShadows {
             .into_iter()
             .map(|s| {
                 if s.name == "map_size" {
-                    ParamSpec::int_or_auto(
+                    ParamSpec::map_size(
                         "map_size",
                         512,
                         16,
