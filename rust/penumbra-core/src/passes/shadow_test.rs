@@ -75,6 +75,14 @@ pub struct ShadowMapSettings {
 const MAX_SLOPE: f32 = 10.0;
 
 impl ShadowMapSettings {
+    /// A method's parameters: those of the map and its test ([`Self::specs`])
+    /// and then the method's own.
+    pub fn specs_and(default_bias: &'static str, own: impl IntoIterator<Item = ParamSpec>) -> Vec<ParamSpec> {
+        let mut specs = Self::specs(default_bias);
+        specs.extend(own);
+        specs
+    }
+
     /// The parameters of the map and its test, with `default_bias` (one of
     /// [`BiasMode::NAMES`]).
     pub fn specs(default_bias: &'static str) -> Vec<ParamSpec> {

@@ -60,14 +60,12 @@ impl Method for PercentageCloserFiltering {
     }
 
     fn specs() -> Vec<ParamSpec> {
-        let mut specs = ShadowMapSettings::specs("slope");
-        specs.extend([
+        ShadowMapSettings::specs_and("slope", [
             ParamSpec::float("kernel", 5.0, 0.0, 256.0, "kernel width in shadow-map texels"),
             ParamSpec::int("samples", 4, 1, 32, "taps per axis of the jittered grid"),
             ParamSpec::seed(u32::MAX as i64, "fixes the taps' jitter"),
             Filter::spec(),
-        ]);
-        specs
+        ])
     }
 
     fn params(p: &ParamSet) -> Result<PcfParams> {

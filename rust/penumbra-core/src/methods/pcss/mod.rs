@@ -108,8 +108,7 @@ impl Method for PercentageCloserSoftShadows {
     }
 
     fn specs() -> Vec<ParamSpec> {
-        let mut specs = ShadowMapSettings::specs("slope");
-        specs.extend([
+        ShadowMapSettings::specs_and("slope", [
             ParamSpec::int("blocker_samples", 4, 1, 32, "taps per axis of the blocker search (at most 8 with 'poisson')"),
             ParamSpec::int("filter_samples", 6, 1, 32, "taps per axis of the filter (at most 8 with 'poisson')"),
             ParamSpec::seed(u32::MAX as i64, "fixes the taps' rotation and jitter"),
@@ -126,8 +125,7 @@ impl Method for PercentageCloserSoftShadows {
                 true,
                 "bound the visibility by the part of the light above the receiver's tangent plane, and where the light's centre has set below it give that sliver, unless another object than the receiver's own hides the centre (the object map; pvm's repair 'horizon'); false: the paper's test of the centre alone",
             ),
-        ]);
-        specs
+        ])
     }
 
     fn params(p: &ParamSet) -> Result<PcssParams> {

@@ -132,8 +132,7 @@ impl Method for PenumbraVolumeMaps {
     }
 
     fn specs() -> Vec<ParamSpec> {
-        let mut specs = ShadowMapSettings::specs("slope");
-        specs.extend([
+        ShadowMapSettings::specs_and("slope", [
             ParamSpec::bool("falloff", true, "the 3k^2 - 2k^3 interpolant of 4.2 (false: the disk fraction k)"),
             OpenEdges::spec(),
             ParamSpec::choice(
@@ -142,8 +141,7 @@ impl Method for PenumbraVolumeMaps {
                 &REPAIR_LEVELS,
                 "departures from the paper for real meshes, cumulative (docs/real_meshes.md): none, cone, cone+hidden, cone+hidden+centre, all (+horizon)",
             ),
-        ]);
-        specs
+        ])
     }
 
     fn params(p: &ParamSet) -> Result<PvmParams> {

@@ -200,8 +200,7 @@ impl Method for PenumbraVolumeMaskFiltering {
         // meshes the two differ by at most 0.014 (docs/real_meshes.md); a
         // minimum separation added to `second_depth` instead let light leak
         // where a caster meets the ground.
-        let mut specs = ShadowMapSettings::specs("slope");
-        specs.extend([
+        ShadowMapSettings::specs_and("slope", [
             ParamSpec::float_above("s_e", 0.5, 0.0, 1.0, "overestimation of the volumes (5.1)"),
             ParamSpec::float("s_p", 2.0, 0.0, 100.0, "scale of the filter width w_pcf (5.2)"),
             ParamSpec::int("n_pcf", 7, 1, 32, "filter taps per axis (5.2)"),
@@ -227,8 +226,7 @@ impl Method for PenumbraVolumeMaskFiltering {
                 &REPAIR_LEVELS,
                 "departures from the paper for real meshes, cumulative (docs/real_meshes.md): none, hidden, hidden+horizon, all (+distance)",
             ),
-        ]);
-        specs
+        ])
     }
 
     fn params(p: &ParamSet) -> Result<PvmfParams> {

@@ -107,8 +107,7 @@ impl Method for ReferenceShadows {
     }
 
     fn specs() -> Vec<ParamSpec> {
-        let mut specs = ShadowMapSettings::specs("slope");
-        specs.extend([
+        ShadowMapSettings::specs_and("slope", [
             ParamSpec::int("n_samples", 256, 1, 4096, "light samples (rounded up to a full stratified grid)"),
             ParamSpec::seed(i64::MAX, "fixes the samples' jitter"),
             ParamSpec::choice(
@@ -118,8 +117,7 @@ impl Method for ReferenceShadows {
                 "samples on the visible sphere (converges to the ground truth) or on Herf's facing disk",
             ),
             ParamSpec::bool("jitter", true, "jitter each sample in its stratum (False: a regular grid through the domain's corners, adaptive's full grid)"),
-        ]);
-        specs
+        ])
     }
 
     fn params(p: &ParamSet) -> Result<ReferenceParams> {

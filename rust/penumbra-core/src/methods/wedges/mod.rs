@@ -151,8 +151,7 @@ impl Method for PenumbraWedges {
     }
 
     fn specs() -> Vec<ParamSpec> {
-        let mut specs = ShadowMapSettings::specs("slope");
-        specs.extend([
+        ShadowMapSettings::specs_and("slope", [
             ParamSpec::int(
                 "acute_wedges",
                 0,
@@ -192,8 +191,7 @@ impl Method for PenumbraWedges {
                 &REPAIR_LEVELS,
                 "departures from the paper for real meshes, cumulative: none, hidden (no wedge for silhouette edges hidden from the light centre), cone+hidden (shared side lines kept in their vertex's light cone), all (+ the light below the receiver's horizon hidden); cone+horizon is all but hidden",
             ),
-        ]);
-        specs
+        ])
     }
 
     fn params(p: &ParamSet) -> Result<WedgesParams> {
