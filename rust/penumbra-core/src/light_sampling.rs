@@ -265,15 +265,15 @@ pub fn scene_sphere_samples(center: DVec3, radius: f64, scene: &PreparedScene, n
 /// factor of 100 from acne and of 100 from leaks.
 pub const DEFAULT_RAY_OFFSET: f64 = 1e-5;
 
-/// Layout of `LightSample` in `shaders/light_samples.wgsl` (the samples
-/// `raytraced` and `triangle_masks` upload).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct SampleUniform {
-    /// The point on the light (xyz) and its weight (w).
-    pub(crate) position: [f32; 4],
-    /// The sphere's outward unit normal there (xyz); w = 1 for solid-angle weights, 0 for equal weights.
-    pub(crate) normal: [f32; 4],
+crate::gpu_type! {
+    /// Layout of `LightSample` in `shaders/light_samples.wgsl` (the samples
+    /// `raytraced` and `triangle_masks` upload).
+    pub struct SampleUniform => "LightSample" in "shaders/light_samples.wgsl" {
+        /// The point on the light (xyz) and its weight (w).
+        pub(crate) position: [f32; 4],
+        /// The sphere's outward unit normal there (xyz); w = 1 for solid-angle weights, 0 for equal weights.
+        pub(crate) normal: [f32; 4],
+    }
 }
 
 impl From<&LightSample> for SampleUniform {

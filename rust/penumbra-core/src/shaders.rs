@@ -190,6 +190,43 @@ macro_rules! gpu_struct {
     };
 }
 
+/// Declares a Rust struct uploaded for a shader (`#[repr(C)]`, `Pod`) with
+/// the WGSL struct it mirrors, its fields written once:
+/// `Type::gpu_struct()` is its [`GpuStruct`] for the layout test.
+///
+/// ```text
+/// gpu_type! {
+///     /// docs
+///     pub struct PcfUniform => "PcfKernel" in "methods/pcf/visibility.wgsl" {
+///         pub(crate) kernel: f32,
+///     }
+/// }
+/// ```
+#[macro_export]
+macro_rules! gpu_type {
+    (
+        $(#[$meta:meta])*
+        $vis:vis struct $name:ident => $wgsl:literal in $file:literal {
+            $( $(#[$field_meta:meta])* $field_vis:vis $field:ident : $ty:ty ),* $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+        $vis struct $name {
+            $( $(#[$field_meta])* $field_vis $field: $ty ),*
+        }
+
+        impl $name {
+            /// This struct's layout with its WGSL twin's name and file
+            /// (`tests/shader_validation.rs` checks them against naga's).
+            pub fn gpu_struct() -> $crate::shaders::GpuStruct {
+                $crate::gpu_struct!($name => $wgsl in $file { $($field),* })
+            }
+        }
+    };
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

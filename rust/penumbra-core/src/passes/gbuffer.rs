@@ -10,11 +10,11 @@ use crate::pass_cache::CachedPass;
 /// The G-buffer as the pass cache keeps it: two cameras (or image sizes) alternating.
 pub const GBUFFER: CachedPass = CachedPass { name: "gbuffer", capacity: 2 };
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct CameraUniforms {
-    pub(crate) view_proj: [[f32; 4]; 4],
-    pub(crate) view: [[f32; 4]; 4],
+crate::gpu_type! {
+    pub struct CameraUniforms => "CameraUniforms" in "passes/gbuffer.wgsl" {
+        pub(crate) view_proj: [[f32; 4]; 4],
+        pub(crate) view: [[f32; 4]; 4],
+    }
 }
 
 pub struct GBufferPass {

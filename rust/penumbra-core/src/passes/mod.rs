@@ -32,11 +32,11 @@ pub fn mat4(m: glam::Mat4) -> [[f32; 4]; 4] {
 /// twins (the methods list theirs: `Method::gpu_structs`).
 pub fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
     vec![
-        crate::gpu_struct!(crate::light_sampling::SampleUniform => "LightSample" in "shaders/light_samples.wgsl" { position, normal }),
-        crate::gpu_struct!(shadow_map::LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" { view, window, depth, faces }),
-        crate::gpu_struct!(shadow_map::ShadowUniforms => "ShadowUniforms" in "passes/light_view.wgsl" { view_proj, view, depth }),
-        crate::gpu_struct!(shadow_test::ShadowTestUniform => "ShadowTest" in "passes/shadow_test.wgsl" { light_space, center, bias, mode }),
-        crate::gpu_struct!(gbuffer::CameraUniforms => "CameraUniforms" in "passes/gbuffer.wgsl" { view_proj, view }),
-        crate::gpu_struct!(shading::ShadingUniforms => "ShadingUniforms" in "passes/shading.wgsl" { light, intensity, ambient, eye }),
+        crate::light_sampling::SampleUniform::gpu_struct(),
+        shadow_map::LightSpaceUniform::gpu_struct(),
+        shadow_map::ShadowUniforms::gpu_struct(),
+        shadow_test::ShadowTestUniform::gpu_struct(),
+        gbuffer::CameraUniforms::gpu_struct(),
+        shading::ShadingUniforms::gpu_struct(),
     ]
 }

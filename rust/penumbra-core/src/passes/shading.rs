@@ -7,13 +7,13 @@ use crate::gpu::{formats, layout, PassTimestamps};
 use crate::passes::screen::ScreenPass;
 
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ShadingUniforms {
-    pub(crate) light: [f32; 4],
-    pub(crate) intensity: [f32; 4],
-    pub(crate) ambient: [f32; 4],
-    pub(crate) eye: [f32; 4],
+crate::gpu_type! {
+    pub struct ShadingUniforms => "ShadingUniforms" in "passes/shading.wgsl" {
+        pub(crate) light: [f32; 4],
+        pub(crate) intensity: [f32; 4],
+        pub(crate) ambient: [f32; 4],
+        pub(crate) eye: [f32; 4],
+    }
 }
 
 pub struct ShadingPass {

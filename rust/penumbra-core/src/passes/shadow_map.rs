@@ -24,12 +24,12 @@ pub enum MapDepth {
     Midpoint,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ShadowUniforms {
-    pub(crate) view_proj: [[f32; 4]; 4],
-    pub(crate) view: [[f32; 4]; 4],
-    pub(crate) depth: [f32; 4],
+crate::gpu_type! {
+    pub struct ShadowUniforms => "ShadowUniforms" in "passes/light_view.wgsl" {
+        pub(crate) view_proj: [[f32; 4]; 4],
+        pub(crate) view: [[f32; 4]; 4],
+        pub(crate) depth: [f32; 4],
+    }
 }
 
 pub struct ShadowMapPass {
@@ -238,14 +238,14 @@ pub fn shadow_uniforms(frustum: &LightFrustum) -> ShadowUniforms {
     }
 }
 
-/// Uniform layout of `LightSpace` in `shaders/light_space.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct LightSpaceUniform {
-    pub view: [[f32; 4]; 4],
-    pub window: [f32; 4],
-    pub depth: [f32; 4],
-    pub faces: [u32; 4],
+crate::gpu_type! {
+    /// Uniform layout of `LightSpace` in `shaders/light_space.wgsl`.
+    pub struct LightSpaceUniform => "LightSpace" in "shaders/light_space.wgsl" {
+        pub view: [[f32; 4]; 4],
+        pub window: [f32; 4],
+        pub depth: [f32; 4],
+        pub faces: [u32; 4],
+    }
 }
 
 impl LightSpaceUniform {

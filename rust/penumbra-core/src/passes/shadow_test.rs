@@ -149,14 +149,13 @@ impl ShadowMapSettings {
     }
 }
 
-/// Layout of `ShadowTest` in `shadow_test.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ShadowTestUniform {
-    pub light_space: LightSpaceUniform,
-    pub center: [f32; 4],
-    pub bias: [f32; 4],
-    pub mode: [u32; 4],
+crate::gpu_type! {
+    pub struct ShadowTestUniform => "ShadowTest" in "passes/shadow_test.wgsl" {
+        pub light_space: LightSpaceUniform,
+        pub center: [f32; 4],
+        pub bias: [f32; 4],
+        pub mode: [u32; 4],
+    }
 }
 
 impl ShadowTestUniform {

@@ -247,12 +247,11 @@ impl Weights {
     pub const NAMES: [&'static str; 2] = ["eq3", "area"];
 }
 
-/// Layout of `CellCompare` in `methods/adaptive/compare.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct CellCompareUniform {
-    pub(crate) tests: [ShadowTestUniform; 4],
-    pub(crate) cell: [u32; 4],
+crate::gpu_type! {
+    pub struct CellCompareUniform => "CellCompare" in "methods/adaptive/compare.wgsl" {
+        pub(crate) tests: [ShadowTestUniform; 4],
+        pub(crate) cell: [u32; 4],
+    }
 }
 
 /// One rendered light point.
@@ -350,9 +349,7 @@ impl Method for AdaptiveShadows {
     type Params = AdaptiveParams;
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            crate::gpu_struct!(CellCompareUniform => "CellCompare" in "methods/adaptive/compare.wgsl" { tests, cell }),
-        ]
+        vec![CellCompareUniform::gpu_struct()]
     }
 
     fn specs() -> Vec<ParamSpec> {

@@ -78,59 +78,55 @@ pub struct BackprojectionParams {
     pub screen_adaptive: bool,
 }
 
-/// Layout of `Backprojection` in `methods/backprojection/contour.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct BackprojectionUniform {
-    pub(crate) t: f32,
-    pub(crate) t_k: f32,
-    pub(crate) beta: f32,
-    pub(crate) s_min: f32,
-    pub(crate) eye: [f32; 4],
-    pub(crate) flags: u32,
-    pub(crate) levels: u32,
-    pub(crate) max_kernel: f32,
-    pub(crate) pad: u32,
-    pub(crate) level_offset: [[u32; 4]; 4],
-    pub(crate) level_size: [[u32; 4]; 4],
+crate::gpu_type! {
+    pub struct BackprojectionUniform => "Backprojection" in "methods/backprojection/contour.wgsl" {
+        pub(crate) t: f32,
+        pub(crate) t_k: f32,
+        pub(crate) beta: f32,
+        pub(crate) s_min: f32,
+        pub(crate) eye: [f32; 4],
+        pub(crate) flags: u32,
+        pub(crate) levels: u32,
+        pub(crate) max_kernel: f32,
+        pub(crate) pad: u32,
+        pub(crate) level_offset: [[u32; 4]; 4],
+        pub(crate) level_size: [[u32; 4]; 4],
+    }
 }
 
-/// Layout of `HierarchyLevel` in `methods/backprojection/hierarchy.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct HierarchyLevelUniform {
-    pub(crate) level: u32,
-    pub(crate) size: u32,
-    pub(crate) below_size: u32,
-    pub(crate) offset: u32,
-    pub(crate) below_offset: u32,
-    pub(crate) layers: u32,
-    pub(crate) active_layers: u32,
-    pub(crate) far: f32,
+crate::gpu_type! {
+    pub struct HierarchyLevelUniform => "HierarchyLevel" in "methods/backprojection/hierarchy.wgsl" {
+        pub(crate) level: u32,
+        pub(crate) size: u32,
+        pub(crate) below_size: u32,
+        pub(crate) offset: u32,
+        pub(crate) below_offset: u32,
+        pub(crate) layers: u32,
+        pub(crate) active_layers: u32,
+        pub(crate) far: f32,
+    }
 }
 
-/// Layout of `DiscontinuityStep` in `methods/backprojection/discontinuity.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct DiscontinuityUniform {
-    pub(crate) mode: u32,
-    pub(crate) radius: i32,
-    pub(crate) pad0: u32,
-    pub(crate) pad1: u32,
+crate::gpu_type! {
+    pub struct DiscontinuityUniform => "DiscontinuityStep" in "methods/backprojection/discontinuity.wgsl" {
+        pub(crate) mode: u32,
+        pub(crate) radius: i32,
+        pub(crate) pad0: u32,
+        pub(crate) pad1: u32,
+    }
 }
 
-/// Layout of `PullPushStep` in `methods/backprojection/pull_push.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PullPushUniform {
-    pub(crate) mode: u32,
-    pub(crate) width: u32,
-    pub(crate) height: u32,
-    pub(crate) offset: u32,
-    pub(crate) other_width: u32,
-    pub(crate) other_height: u32,
-    pub(crate) other_offset: u32,
-    pub(crate) pad: u32,
+crate::gpu_type! {
+    pub struct PullPushUniform => "PullPushStep" in "methods/backprojection/pull_push.wgsl" {
+        pub(crate) mode: u32,
+        pub(crate) width: u32,
+        pub(crate) height: u32,
+        pub(crate) offset: u32,
+        pub(crate) other_width: u32,
+        pub(crate) other_height: u32,
+        pub(crate) other_offset: u32,
+        pub(crate) pad: u32,
+    }
 }
 
 /// Names of the counters, in the order of the shaders' `counters`: pixels
@@ -229,10 +225,10 @@ impl Method for SoftShadowBackprojection {
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
         vec![
-            crate::gpu_struct!(BackprojectionUniform => "Backprojection" in "methods/backprojection/contour.wgsl" { t, t_k, beta, s_min, eye, flags, levels, max_kernel, pad, level_offset, level_size }),
-            crate::gpu_struct!(HierarchyLevelUniform => "HierarchyLevel" in "methods/backprojection/hierarchy.wgsl" { level, size, below_size, offset, below_offset, layers, active_layers, far }),
-            crate::gpu_struct!(DiscontinuityUniform => "DiscontinuityStep" in "methods/backprojection/discontinuity.wgsl" { mode, radius, pad0, pad1 }),
-            crate::gpu_struct!(PullPushUniform => "PullPushStep" in "methods/backprojection/pull_push.wgsl" { mode, width, height, offset, other_width, other_height, other_offset, pad }),
+            BackprojectionUniform::gpu_struct(),
+            HierarchyLevelUniform::gpu_struct(),
+            DiscontinuityUniform::gpu_struct(),
+            PullPushUniform::gpu_struct(),
         ]
     }
 

@@ -34,14 +34,13 @@ pub struct PcfParams {
     pub filter: Filter,
 }
 
-/// Layout of `PcfKernel` in `methods/pcf/visibility.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PcfUniform {
-    pub(crate) kernel: f32,
-    pub(crate) samples: u32,
-    pub(crate) seed: u32,
-    pub(crate) nearest: u32,
+crate::gpu_type! {
+    pub struct PcfUniform => "PcfKernel" in "methods/pcf/visibility.wgsl" {
+        pub(crate) kernel: f32,
+        pub(crate) samples: u32,
+        pub(crate) seed: u32,
+        pub(crate) nearest: u32,
+    }
 }
 
 pub struct PercentageCloserFiltering {
@@ -54,9 +53,7 @@ impl Method for PercentageCloserFiltering {
     type Params = PcfParams;
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            crate::gpu_struct!(PcfUniform => "PcfKernel" in "methods/pcf/visibility.wgsl" { kernel, samples, seed, nearest }),
-        ]
+        vec![PcfUniform::gpu_struct()]
     }
 
     fn specs() -> Vec<ParamSpec> {

@@ -73,18 +73,17 @@ pub struct PcssParams {
     pub horizon: bool,
 }
 
-/// Layout of `PcssSampling` in `methods/pcss/visibility.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PcssUniform {
-    pub(crate) blocker_samples: u32,
-    pub(crate) filter_samples: u32,
-    pub(crate) seed: u32,
-    pub(crate) poisson: u32,
-    /// 1: `BlockerTest::Cone`.
-    pub(crate) cone: u32,
-    /// 1: `PcssParams::horizon`.
-    pub(crate) horizon: u32,
+crate::gpu_type! {
+    pub struct PcssUniform => "PcssSampling" in "methods/pcss/visibility.wgsl" {
+        pub(crate) blocker_samples: u32,
+        pub(crate) filter_samples: u32,
+        pub(crate) seed: u32,
+        pub(crate) poisson: u32,
+        /// 1: `BlockerTest::Cone`.
+        pub(crate) cone: u32,
+        /// 1: `PcssParams::horizon`.
+        pub(crate) horizon: u32,
+    }
 }
 
 /// Names of the pass's counters, in order: pixels that ran the blocker
@@ -102,9 +101,7 @@ impl Method for PercentageCloserSoftShadows {
     type Params = PcssParams;
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            crate::gpu_struct!(PcssUniform => "PcssSampling" in "methods/pcss/visibility.wgsl" { blocker_samples, filter_samples, seed, poisson, cone, horizon }),
-        ]
+        vec![PcssUniform::gpu_struct()]
     }
 
     fn specs() -> Vec<ParamSpec> {

@@ -20,13 +20,14 @@ pub struct VolumeVertex {
     pub edge: u32,
 }
 
-/// The end points h0 and h1 of a silhouette edge with a volume (w unused),
-/// as the visibility pass reads them (4.1.3's edge maps, by index).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct EdgePoints {
-    pub h0: [f32; 4],
-    pub h1: [f32; 4],
+crate::gpu_type! {
+    /// The end points h0 and h1 of a silhouette edge with a volume (w unused),
+    /// as the visibility pass reads them (4.1.3's edge maps, by index).
+    #[derive(Debug, PartialEq)]
+    pub struct EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" {
+        pub h0: [f32; 4],
+        pub h1: [f32; 4],
+    }
 }
 
 /// Everything pass 2 renders: the quadrilaterals' corners and the edges they index.

@@ -126,9 +126,7 @@ impl Method for PenumbraVolumeMaps {
     type Params = PvmParams;
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            crate::gpu_struct!(EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" { h0, h1 }),
-        ]
+        vec![EdgePoints::gpu_struct()]
     }
 
     fn specs() -> Vec<ParamSpec> {

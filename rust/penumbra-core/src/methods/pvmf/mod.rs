@@ -93,24 +93,22 @@ pub struct PvmfParams {
 /// measures them; "all" (the default) adds the local edge distance to the last.
 pub const REPAIR_LEVELS: [&str; 4] = ["all", "none", "hidden", "hidden+horizon"];
 
-/// Layout of `PvmfSettings` in `methods/pvmf/estimate.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct SettingsUniform {
-    pub(crate) s_p: f32,
-    pub(crate) n_pcf: u32,
-    pub(crate) seed: u32,
-    pub(crate) flags: u32,
-    pub(crate) blur_min_width: f32,
+crate::gpu_type! {
+    pub struct SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" {
+        pub(crate) s_p: f32,
+        pub(crate) n_pcf: u32,
+        pub(crate) seed: u32,
+        pub(crate) flags: u32,
+        pub(crate) blur_min_width: f32,
+    }
 }
 
-/// Layout of `BlurSettings` in `methods/pvmf/blur.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct BlurUniform {
-    pub(crate) step: [i32; 2],
-    pub(crate) half_width: i32,
-    pub(crate) count: u32,
+crate::gpu_type! {
+    pub struct BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" {
+        pub(crate) step: [i32; 2],
+        pub(crate) half_width: i32,
+        pub(crate) count: u32,
+    }
 }
 
 /// Named counters, in the order of `methods/pvmf/estimate.wgsl`'s `counters`.
@@ -185,8 +183,8 @@ impl Method for PenumbraVolumeMaskFiltering {
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
         vec![
-            crate::gpu_struct!(SettingsUniform => "PvmfSettings" in "methods/pvmf/estimate.wgsl" { s_p, n_pcf, seed, flags, blur_min_width }),
-            crate::gpu_struct!(BlurUniform => "BlurSettings" in "methods/pvmf/blur.wgsl" { step, half_width, count }),
+            SettingsUniform::gpu_struct(),
+            BlurUniform::gpu_struct(),
         ]
     }
 

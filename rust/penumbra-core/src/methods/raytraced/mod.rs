@@ -60,16 +60,15 @@ pub struct RaytracedParams {
     pub ray_offset: f64,
 }
 
-/// Layout of `RaySettings` in `methods/raytraced/visibility.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct RaySettingsUniform {
-    /// The light's centre (xyz) and radius (w).
-    pub(crate) light: [f32; 4],
-    /// x: the ray origins' offset in world units.
-    pub(crate) offset: [f32; 4],
-    /// Samples in the full set, points in the coarse set, the classification's radius, unused.
-    pub(crate) counts: [u32; 4],
+crate::gpu_type! {
+    pub struct RaySettingsUniform => "RaySettings" in "methods/raytraced/visibility.wgsl" {
+        /// The light's centre (xyz) and radius (w).
+        pub(crate) light: [f32; 4],
+        /// x: the ray origins' offset in world units.
+        pub(crate) offset: [f32; 4],
+        /// Samples in the full set, points in the coarse set, the classification's radius, unused.
+        pub(crate) counts: [u32; 4],
+    }
 }
 
 /// Counters read back into stats: pixels that took the full sample set, and
@@ -118,9 +117,7 @@ impl Method for RaytracedShadows {
     type Params = RaytracedParams;
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            crate::gpu_struct!(RaySettingsUniform => "RaySettings" in "methods/raytraced/visibility.wgsl" { light, offset, counts }),
-        ]
+        vec![RaySettingsUniform::gpu_struct()]
     }
 
     fn specs() -> Vec<ParamSpec> {

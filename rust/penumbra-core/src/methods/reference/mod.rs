@@ -81,14 +81,13 @@ pub struct ReferenceParams {
 }
 
 
-/// Layout of `SampleWeight` in `methods/reference/visibility.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct SampleWeightUniform {
-    /// The sphere's outward unit normal at the sample; w = 1 for solid-angle weights.
-    pub(crate) normal: [f32; 4],
-    /// The light's centre (xyz).
-    pub(crate) light_center: [f32; 4],
+crate::gpu_type! {
+    pub struct SampleWeightUniform => "SampleWeight" in "methods/reference/visibility.wgsl" {
+        /// The sphere's outward unit normal at the sample; w = 1 for solid-angle weights.
+        pub(crate) normal: [f32; 4],
+        /// The light's centre (xyz).
+        pub(crate) light_center: [f32; 4],
+    }
 }
 
 pub struct ReferenceShadows {
@@ -101,9 +100,7 @@ impl Method for ReferenceShadows {
     type Params = ReferenceParams;
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            crate::gpu_struct!(SampleWeightUniform => "SampleWeight" in "methods/reference/visibility.wgsl" { normal, light_center }),
-        ]
+        vec![SampleWeightUniform::gpu_struct()]
     }
 
     fn specs() -> Vec<ParamSpec> {

@@ -69,15 +69,14 @@ pub struct TriangleMaskParams {
     pub binning: bool,
 }
 
-/// Layout of `MaskSettings` in `methods/triangle_masks/masks.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct MaskSettingsUniform {
-    pub(crate) light: [f32; 4],
-    pub(crate) offset: [f32; 4],
-    pub(crate) counts: [u32; 4],
-    pub(crate) tiles: [u32; 4],
-    pub(crate) dispatch: [u32; 4],
+crate::gpu_type! {
+    pub struct MaskSettingsUniform => "MaskSettings" in "methods/triangle_masks/masks.wgsl" {
+        pub(crate) light: [f32; 4],
+        pub(crate) offset: [f32; 4],
+        pub(crate) counts: [u32; 4],
+        pub(crate) tiles: [u32; 4],
+        pub(crate) dispatch: [u32; 4],
+    }
 }
 
 /// Counters of masks.wgsl: [0] tile-list entries (triangles binned, summed
@@ -164,9 +163,7 @@ impl Method for TriangleMasks {
     type Params = TriangleMaskParams;
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            crate::gpu_struct!(MaskSettingsUniform => "MaskSettings" in "methods/triangle_masks/masks.wgsl" { light, offset, counts, tiles, dispatch }),
-        ]
+        vec![MaskSettingsUniform::gpu_struct()]
     }
 
     fn specs() -> Vec<ParamSpec> {

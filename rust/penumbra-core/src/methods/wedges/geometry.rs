@@ -12,32 +12,33 @@ use glam::{DMat4, DVec3, DVec4};
 
 use crate::silhouettes::SilhouetteEdge;
 
-/// One wedge as the visibility shader reads it (methods/wedges/visibility.wgsl,
-/// struct `Wedge`). Planes are unit normals; a plane through the edge's
-/// start `a` (front, back, hard, left) is evaluated as `dot(n, p - a)`, the
-/// right side plane through the end `b` as `dot(n, p - b)`.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct WedgeGpu {
-    /// Edge start (xyz).
-    pub a: [f32; 4],
-    /// Edge end (xyz); equal to `a` for an extra wedge at a vertex.
-    pub b: [f32; 4],
-    /// Unit direction of the edge (xyz), the ray direction of Eq. 3; w: the
-    /// connected surface it lies on (`SilhouetteEdge::component`).
-    pub dir: [f32; 4],
-    /// Front plane (through `f = c - r n`): the wedge is where it is <= 0.
-    pub front: [f32; 4],
-    /// Back plane (through `b = c + r n`): the wedge is where it is >= 0.
-    pub back: [f32; 4],
-    /// The shadow-volume quad's plane (normal n, away from the occluder).
-    pub hard: [f32; 4],
-    /// Side planes, normals pointing into the wedge.
-    pub left: [f32; 4],
-    pub right: [f32; 4],
-    /// Unit ray directions in the left and right side planes (4.1, last paragraph).
-    pub u_left: [f32; 4],
-    pub u_right: [f32; 4],
+crate::gpu_type! {
+    /// One wedge as the visibility shader reads it (methods/wedges/visibility.wgsl,
+    /// struct `Wedge`). Planes are unit normals; a plane through the edge's
+    /// start `a` (front, back, hard, left) is evaluated as `dot(n, p - a)`, the
+    /// right side plane through the end `b` as `dot(n, p - b)`.
+    #[derive(Debug, PartialEq)]
+    pub struct WedgeGpu => "Wedge" in "methods/wedges/visibility.wgsl" {
+        /// Edge start (xyz).
+        pub a: [f32; 4],
+        /// Edge end (xyz); equal to `a` for an extra wedge at a vertex.
+        pub b: [f32; 4],
+        /// Unit direction of the edge (xyz), the ray direction of Eq. 3; w: the
+        /// connected surface it lies on (`SilhouetteEdge::component`).
+        pub dir: [f32; 4],
+        /// Front plane (through `f = c - r n`): the wedge is where it is <= 0.
+        pub front: [f32; 4],
+        /// Back plane (through `b = c + r n`): the wedge is where it is >= 0.
+        pub back: [f32; 4],
+        /// The shadow-volume quad's plane (normal n, away from the occluder).
+        pub hard: [f32; 4],
+        /// Side planes, normals pointing into the wedge.
+        pub left: [f32; 4],
+        pub right: [f32; 4],
+        /// Unit ray directions in the left and right side planes (4.1, last paragraph).
+        pub u_left: [f32; 4],
+        pub u_right: [f32; 4],
+    }
 }
 
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

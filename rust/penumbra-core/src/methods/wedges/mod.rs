@@ -115,11 +115,12 @@ impl HardTerm {
     pub const NAMES: [&'static str; 2] = ["at_point", "lit_side"];
 }
 
-/// The visibility pass's settings (`WedgeSettings` in visibility.wgsl).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct WedgeSettingsUniform {
-    pub tiles: [u32; 4],
+crate::gpu_type! {
+    /// The visibility pass's settings (`WedgeSettings` in visibility.wgsl).
+    #[derive(Debug)]
+    pub struct WedgeSettingsUniform => "WedgeSettings" in "methods/wedges/visibility.wgsl" {
+        pub tiles: [u32; 4],
+    }
 }
 
 /// Pass 2's output.
@@ -145,8 +146,8 @@ impl Method for PenumbraWedges {
 
     fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
         vec![
-            crate::gpu_struct!(WedgeGpu => "Wedge" in "methods/wedges/visibility.wgsl" { a, b, dir, front, back, hard, left, right, u_left, u_right }),
-            crate::gpu_struct!(WedgeSettingsUniform => "WedgeSettings" in "methods/wedges/visibility.wgsl" { tiles }),
+            WedgeGpu::gpu_struct(),
+            WedgeSettingsUniform::gpu_struct(),
         ]
     }
 
