@@ -1,20 +1,17 @@
-"""The numbers the docs (docs/ground_truth.md) and the tests' tolerances rest on, printed.
+"""The numbers of docs/ground_truth.md's export checks, printed.
 
 1. Mitsuba's unshadowed radiance against Penumbra's (relative RMSE, off silhouettes).
 2. The visibility estimator against the closed form of a sphere occluder
    (RMSE over the penumbra, beside the estimator's own seed-to-seed noise).
 3. Mitsuba's radiance from small sphere lights, exported as spheres, against
    Penumbra's exact irradiance (why small lights are exported as points).
-4. Per-pass timings with GPU timestamps and with CPU clocks, after a warm-up.
-5. PVM with a light twice the occluder's radius: ground pixels off by > 0.5.
 
-The scenes are those of tests/test_ground_truth.py and tests/test_pvm.py.
+The scenes are those of tests/test_ground_truth.py.
 
     python benchmarks/checks.py
 """
 
 from __future__ import annotations
-
 
 import numpy as np
 
@@ -75,34 +72,12 @@ def small_sphere_lights(renderer: penumbra.Renderer) -> None:
     print("3. Mitsuba sphere light / exact irradiance, lit ground about 5 units away: " + ", ".join(cells))
 
 
-def timings() -> None:
-    scene = penumbra.scenes.get(width=512, height=512)
-    for timing in ("auto", "cpu"):
-        r = penumbra.Renderer(timing=timing, pass_cache=False)
-        for _ in range(3):
-            result = r.render(scene)
-        passes = ", ".join(f"{k} {v:.2f}" for k, v in result.timings.items())
-        print(f"4. timing={timing} ({result.timing_source}), ms: {passes}")
-
-
-def pvm_large_light(renderer: penumbra.Renderer) -> None:
-    scene = penumbra.scenes.get("sphere_on_plane", width=320, height=320, light_radius=2.0)
-    result = renderer.render(scene, "pvm")
-    gt = pm.ground_truth(scene, spp=1024, kinds=["visibility"])
-    wrong = (np.abs(result.visibility - gt.visibility) > 0.5) & (result.object_id == 0)
-    where = np.argwhere(wrong)
-    first = result.position[tuple(where[0])] if len(where) else None
-    print(f"5. pvm, light radius 2 over a sphere of radius 1: {wrong.sum()} ground pixels off by > 0.5, e.g. at {first}")
-
-
 def main() -> None:
     renderer = penumbra.Renderer()
     print(f"adapter {renderer.adapter_info['name']}; Mitsuba {pm.variant()}")
     unshadowed_radiance(renderer)
     estimator_against_closed_form()
     small_sphere_lights(renderer)
-    timings()
-    pvm_large_light(renderer)
 
 
 if __name__ == "__main__":

@@ -21,10 +21,14 @@ PARAMS = {"reference": {"n_samples": 64}, "raytraced": {"n_samples": 16}, "trian
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("meshes", nargs="*", default=[str(scenes.meshes_folder() / m) for m in ("spot.obj", "corpus/cat-low-resolution.obj")])
+    root = scenes.meshes_folder()
+    shared = [str(root / m) for m in ("spot.obj", "corpus/cat-low-resolution.obj")] if root is not None else []
+    parser.add_argument("meshes", nargs="*", default=shared, help="mesh files (default: spot and the low-resolution cat of the shared meshes)")
     parser.add_argument("--size", type=int, default=128)
     parser.add_argument("--rounds", type=int, default=5)
     args = parser.parse_args()
+    if not args.meshes:
+        parser.error("no MESH given and the shared meshes are absent (set PENUMBRA_MESHES)")
     renderer = penumbra.Renderer(pass_cache=False)
     print("| mesh | method | welded ms | soup ms | soup / welded |\n|---|---|---|---|---|")
     for path in args.meshes:

@@ -1,22 +1,21 @@
 """Omnidirectional shadow maps (issue 17): cube faces against the fitted
-frustum, and every method on scenes one frustum cannot cover.
+frustum where both apply.
 
-1. Seams: on every built-in scene (where one frustum covers the geometry),
-   each method rendered with `projection="cube"` against `"frustum"` at the
-   same `map_size`, beside the frustum's own resolution error (the frustum
-   at `map_size` against four times that) and, for the methods that jitter
-   their taps, their sampling noise (seed 0 against seed 1); then both
-   projections' penumbra error against Mitsuba, and the largest difference
-   over pixels within two texels of a cube face boundary.
-4. `reference` at 1024 samples on the wide floor against the convergence
-   criterion of the built-in scenes (benchmarks/reference_convergence.py):
-   2 x ground-truth noise + the resolution error (its 4096 map against 2048).
+Seams: on every built-in scene (where one frustum covers the geometry),
+each method rendered with `projection="cube"` against `"frustum"` at the
+same `map_size`, beside the frustum's own resolution error (the frustum at
+`map_size` against four times that) and, for the methods that jitter their
+taps, their sampling noise (seed 0 against seed 1); then both projections'
+penumbra error against Mitsuba, and the largest difference over pixels
+within two texels of a cube face boundary.
 
-    python benchmarks/omnidirectional.py [--size 128] [--spp 1024] [--parts 1 4]
+    python benchmarks/omnidirectional.py [--size 128] [--map-size 1024] [--spp 1024]
 
-Parts 2 and 3 (the cost of cube faces, and every method against Mitsuba on
-the wide floor, the Cornell box and Sponza) are
-`penumbra bench --config benchmarks/omnidirectional.toml`.
+The cost of cube faces, and every method against Mitsuba on the wide floor,
+the Cornell box and Sponza: `penumbra bench --config
+benchmarks/omnidirectional.toml`; `reference` at 1024 samples on the wide
+floor against the convergence criterion: `python
+benchmarks/reference_convergence.py --scenes wide_floor:spot.obj --spp 1024`.
 """
 
 from __future__ import annotations
@@ -77,34 +76,14 @@ def part_seams(renderer: penumbra.Renderer, size: int, map_size: int, spp: int) 
             )
 
 
-def part_reference(renderer: penumbra.Renderer, size: int, spp: int) -> None:
-    print(f"\n## `reference` at 1024 samples on the wide floor ({size}x{size}, {spp} spp)\n")
-    scene = penumbra.scenes.get("wide_floor:spot.obj", width=size, height=size)
-    gt = pm.ground_truth(scene, spp=spp, noise_seed=1, kinds=["visibility"])
-    region = metrics.penumbra_region(gt.visibility)
-    noise = metrics.seed_noise(gt.visibility, gt.second.visibility, region)
-    result = renderer.render(scene, "reference", n_samples=1024)
-    finer = renderer.render(scene, "reference", n_samples=1024, map_size=4096)
-    error = metrics.rmse(result.visibility, gt.visibility, region)
-    resolution = metrics.rmse(result.visibility, finer.visibility, region)
-    criterion = 2 * noise + resolution
-    print("| penumbra RMSE | ground-truth noise | resolution error | criterion | met | cube maps |")
-    print("|---|---|---|---|---|---|")
-    print(f"| {error:.4f} | {noise:.4f} | {resolution:.4f} | {criterion:.4f} | {'yes' if error <= criterion else 'no'} | {result.stats['cube_maps']} of {result.stats['light_samples']} |")
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--size", type=int, default=128)
     parser.add_argument("--map-size", type=int, default=1024)
     parser.add_argument("--spp", type=int, default=1024)
-    parser.add_argument("--parts", type=int, nargs="+", default=[1, 4], choices=[1, 4])
     args = parser.parse_args()
     renderer = penumbra.Renderer(timing="cpu", pass_cache=False)
-    if 1 in args.parts:
-        part_seams(renderer, args.size, args.map_size, args.spp)
-    if 4 in args.parts:
-        part_reference(renderer, args.size, args.spp)
+    part_seams(renderer, args.size, args.map_size, args.spp)
 
 
 if __name__ == "__main__":

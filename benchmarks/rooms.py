@@ -2,7 +2,7 @@
 under a rotation of the whole scene, over `penumbra.rooms.room_suite`.
 
     python benchmarks/rooms.py                       # 64x64, every method, the table
-    python benchmarks/rooms.py --methods pcss pcf --json out.json
+    python benchmarks/rooms.py --methods pcss pcf --scenes "corridor middle"
 
 Prints, per method, the worst and the mean over the scenes of the fraction
 of pixels off the truth (`reference` at 1024 samples) by more than 0.1, and
@@ -13,10 +13,6 @@ of the fraction moved by more than 0.1 by the rotation (30 degrees about x,
 from __future__ import annotations
 
 import argparse
-import json
-import sys
-from dataclasses import asdict
-from pathlib import Path
 
 import numpy as np
 
@@ -54,23 +50,14 @@ def main() -> None:
     parser.add_argument("--methods", nargs="*", default=METHODS)
     parser.add_argument("--scenes", nargs="*", help="scene names of the suite (all by default)")
     parser.add_argument("--truth-samples", type=int, default=rooms.TRUTH_SAMPLES)
-    parser.add_argument("--meshes", type=Path, default=penumbra.scenes.meshes_folder() or Path("../shared/meshes"), help="the folder of CornellBox-Original.obj (default ../shared/meshes)")
-    parser.add_argument("--json", help="write every row here")
-    parser.add_argument("--images", help="write every visibility image here (.npz)")
-    parser.add_argument("--truth-from", help="take the truths from the images of an earlier run (.npz of --images)")
     args = parser.parse_args()
-    cornell = args.meshes / "CornellBox-Original.obj"
-    suite = rooms.room_suite(args.size, str(cornell) if cornell.exists() else None)
+    # The Cornell box's scenes come from the shared meshes (penumbra.scenes.meshes_folder), where present.
+    meshes = penumbra.scenes.meshes_folder()
+    cornell = meshes / "CornellBox-Original.obj" if meshes is not None else None
+    suite = rooms.room_suite(args.size, str(cornell) if cornell is not None and cornell.exists() else None)
     if args.scenes:
         suite = {k: v for k, v in suite.items() if k in args.scenes}
-    images: dict = {}
-    if args.truth_from:
-        with np.load(args.truth_from) as saved:
-            for key in saved.files:
-                scene, method, turned = key.split("|")
-                if method in ("truth", "geometry"):
-                    images[(scene, method, bool(int(turned)))] = saved[key]
-    rows = rooms.measure(penumbra.Renderer(), suite, args.methods, params=PARAMS, truth_samples=args.truth_samples, images=images)
+    rows = rooms.measure(penumbra.Renderer(), suite, args.methods, params=PARAMS, truth_samples=args.truth_samples)
     print(f"## {len(suite)} room scenes at {args.size}x{args.size}, truth: reference at {args.truth_samples} samples\n")
     print(table(rows))
     print("\n| scene | method | off | off rotated | moved | truth moved |\n|---|---|---|---|---|---|")
@@ -79,11 +66,6 @@ def main() -> None:
             print(f"| {r.scene} | {r.method} | refused: {r.refused[:60]} | | | {r.truth_moved:.1%} |")
         else:
             print(f"| {r.scene} | {r.method} | {r.off:.1%} | {r.off_rotated:.1%} | {r.moved:.1%} | {r.truth_moved:.1%} |")
-    if args.json:
-        Path(args.json).write_text(json.dumps([asdict(r) for r in rows], indent=1))
-    if args.images:
-        np.savez_compressed(args.images, **{f"{s}|{m}|{int(t)}": v for (s, m, t), v in images.items()})
-    sys.stdout.flush()
 
 
 if __name__ == "__main__":

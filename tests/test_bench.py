@@ -129,6 +129,21 @@ def test_mesh_variants_are_the_real_mesh_suites_scenes() -> None:
     assert built.name == "spot"
 
 
+def test_a_scene_without_a_penumbra_leaves_the_medians_and_the_plot_alone(tmp_path: Path) -> None:
+    # A light of radius 0 (pvmf_cost.toml's first radius): no penumbra, a NaN penumbra RMSE.
+    rows = [
+        {"scene": f"s r={r}", "method": m, "label": "default", "kind": "method", "total_ms": ms, "time_over_hard": ms / 2.0, bench.ERROR: e}
+        for r, e in ((0, math.nan), (0.1, 0.2), (0.5, 0.1))
+        for m, ms in (("hard", 2.0), ("pvmf", 6.0))
+    ]
+    rows.append({"scene": "s r=0", "method": "wedges", "label": "default", "kind": "method", "total_ms": 3.0, "time_over_hard": 1.5, bench.ERROR: math.nan})
+    points = {p.method: p for p in bench.aggregate(rows)}
+    assert points["hard"].error == pytest.approx(0.15) and points["pvmf"].ms == 6.0
+    assert math.isnan(points["wedges"].error)
+    bench.plot_pareto(list(points.values()), tmp_path / "pareto.png", "radius 0")
+    assert (tmp_path / "pareto.png").stat().st_size > 0
+
+
 def test_markdown_table_writes_the_chosen_columns() -> None:
     rows = [
         {"scene": "s", "size": "8x8", "method": "hard", "label": "default", "visibility_rmse_penumbra": 0.123456, "stat_wedges": ""},

@@ -131,7 +131,7 @@ LONG = settings(max_examples=40, derandomize=True, deadline=None, suppress_healt
 # 22: a scene 1e-7 across was refused as "the light intersects mesh" by an
 # absolute tolerance). The core enforces what lies beyond: coordinates past
 # +-1e18 and scenes less than 1e-18 across are refused with a typed error
-# naming float32 (tests/test_bad_input.py); `benchmarks/scale_limits.py`
+# naming float32 (tests/test_bad_input.py); `benchmarks/stability.py --limits`
 # measured where visibility goes wrong without those bounds (docs/stability.md).
 MIN_EXPONENT, MAX_EXPONENT = -7, 10
 # pvm's visibility changed at 1e10 (0.054 of the pixels by more than 0.1 on

@@ -88,16 +88,24 @@ class Point:
     error: float
 
 
+def _median(values: list[float]) -> float:
+    """The median of the finite values; NaN when there is none (the penumbra
+    RMSE of a scene without a penumbra, such as a light of radius 0)."""
+    finite = [v for v in values if math.isfinite(v)]
+    return float(np.median(finite)) if finite else math.nan
+
+
 def aggregate(rows: list[dict[str, Any]]) -> list[Point]:
     """Medians over the scenes of each (method, setting): time, time over
     ``hard`` and penumbra visibility RMSE (a scene where a method fails does
-    not move the median as it moves a mean)."""
+    not move the median as it moves a mean; a scene without a penumbra has
+    no penumbra RMSE and is left out of its median)."""
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for row in rows:
         groups.setdefault((row["method"], row["label"]), []).append(row)
     return [
-        Point(method, lab, g[0]["kind"], float(np.median([float(r["total_ms"]) for r in g])),
-              float(np.median([float(r["time_over_hard"]) for r in g])), float(np.median([float(r[ERROR]) for r in g])))
+        Point(method, lab, g[0]["kind"], _median([float(r["total_ms"]) for r in g]),
+              _median([float(r["time_over_hard"]) for r in g]), _median([float(r[ERROR]) for r in g]))
         for (method, lab), g in groups.items()
     ]
 
@@ -165,7 +173,8 @@ def ratio_tables(rows: list[dict[str, Any]], points: list[Point]) -> str:
 
 def plot_pareto(points: list[Point], path: Path, title: str) -> None:
     """Time against penumbra visibility RMSE, log-log: every setting as a dot,
-    each method's Pareto front as a line, peers dashed."""
+    each method's Pareto front as a line, peers dashed; settings without a
+    finite positive error (no scene with a penumbra) are left out."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -173,7 +182,10 @@ def plot_pareto(points: list[Point], path: Path, title: str) -> None:
 
     fig, ax = plt.subplots(figsize=(8, 5.5))
     for method, group in _by_method(points).items():
-        xy = [(p.ms, p.error) for p in group]
+        # Log axes: a point without a finite positive time and error (no penumbra anywhere) is not drawn.
+        xy = [(p.ms, p.error) for p in group if p.ms > 0 and p.error > 0 and math.isfinite(p.ms) and math.isfinite(p.error)]
+        if not xy:
+            continue
         front = [xy[i] for i in pareto_front(xy)]
         peer = group[0].kind == "peer"
         (line,) = ax.plot([t for t, _ in front], [e for _, e in front], "--" if peer else "-", marker="o", label=method)
