@@ -133,9 +133,9 @@ pub fn disk_point(center: DVec3, radius: f64, (e1, e2): (DVec3, DVec3), u: DVec2
 ///
 /// A light seen from every side (`cos_max = -1`: a room around it, see
 /// [`visible_cap_cos_of`]) gets half of its samples uniform over the
-/// whole sphere (measured with
-/// benchmarks/omnidirectional.py's scenes: penumbra RMSE at 64 samples
-/// against Mitsuba, 1/8 uniform, 1/2, all uniform: Sponza 0.238, 0.106,
+/// whole sphere (measured on the scenes of `penumbra bench --config
+/// benchmarks/omnidirectional.toml`: penumbra RMSE at 64 samples against
+/// Mitsuba, 1/8 uniform, 1/2, all uniform: Sponza 0.238, 0.106,
 /// 0.101; Cornell box 0.042, 0.029, 0.050; wide floor 0.027, 0.027, 0.062).
 ///
 /// Each sample's weight is 1 / (n_c p_c(s) + n_u p_u(s)), the balance

@@ -66,13 +66,13 @@ pub const MAX_PIXELS: u64 = 8192 * 8192;
 /// within this range are less than 3.5e18 apart, whose square (1.2e37)
 /// leaves float32's maximum (3.4e38) a margin of 28 for the products built
 /// on it. Beyond about 1.8e19 a single squared coordinate overflows.
-/// (`benchmarks/scale_limits.py`: visibility unchanged with coordinates up
+/// (`python benchmarks/stability.py --limits`: visibility unchanged with coordinates up
 /// to 2e17, pvm's aside.)
 pub const MAX_COORDINATE: f64 = 1e18;
 
 /// The smallest extent (largest side of the geometry's bounding box, in world
 /// units) a scene may have. Squared distances underflow float32 (smallest
-/// normal 1.2e-38) near 1e-19. Measured by `benchmarks/scale_limits.py` with
+/// normal 1.2e-38) near 1e-19. Measured by `python benchmarks/stability.py --limits` with
 /// this bound set to 0: on the fixed box scene of the property tests, every
 /// method's visibility (pvm's aside, see docs/stability.md) is unchanged down
 /// to an extent of 4e-22 and wrong at 4e-23 (mean difference 0.02-0.04) and
