@@ -4,9 +4,10 @@ maps, every implemented method with parameters that keep lavapipe quick."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
+import pytest
 
 import penumbra
 
@@ -51,3 +52,27 @@ def camera(eye: tuple[float, float, float] = (0.0, 4.0, 6.0), target: tuple[floa
 
 def mesh(vertices: Any, faces: Any, name: str, object_id: int = 1) -> penumbra.Mesh:
     return penumbra.Mesh(np.asarray(vertices, dtype=np.float64), np.asarray(faces), albedo=0.7, object_id=object_id, name=name)
+
+
+def builtin_scenes_against_truth(
+    renderer: penumbra.Renderer, cache: Path, size: int, settings: dict[str, dict[str, Any]]
+) -> Iterator[tuple[str, dict[str, dict[str, float]], penumbra.RenderResult, Any]]:
+    """Every built-in scene at `size` x `size` against its Mitsuba ground
+    truth (256 spp, cached under `cache`; the test skips without Mitsuba):
+    per scene its name, `metrics.compare` of `hard` and of each setting of
+    `settings` (label: method and parameters, ``{"method": ..., **params}``),
+    the last setting's render, and the truth."""
+    pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
+    from penumbra import metrics
+
+    for name in penumbra.scenes.names():
+        scene = penumbra.scenes.get(name, width=size, height=size)
+        gt = pm.ground_truth(scene, spp=256, cache_dir=cache)
+        errors = {"hard": metrics.compare(renderer.render(scene, "hard"), gt)}
+        result = None
+        for label, setting in settings.items():
+            params = dict(setting)
+            result = renderer.render(scene, params.pop("method"), **params)
+            errors[label] = metrics.compare(result, gt)
+        assert result is not None
+        yield name, errors, result, gt

@@ -7,6 +7,7 @@ import pytest
 
 import penumbra
 from penumbra.scenes import box, ground_plane, ground_slab, sphere
+from stress_scenes import builtin_scenes_against_truth
 
 # Up to larger than every built-in caster (the largest is 2 units) while clear of geometry.
 RADII = [0.0, 1e-4, 0.05, 0.5, 2.2]
@@ -55,15 +56,8 @@ def test_visibility_is_the_disk_cut_fraction_across_one_edge(renderer: penumbra.
 
 
 def test_pvm_beats_hard_against_ground_truth_on_every_builtin_scene(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
-    pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
-    from penumbra import metrics
-
-    cache = tmp_path_factory.mktemp("gt")
-    for name in penumbra.scenes.names():
-        scene = penumbra.scenes.get(name, width=96, height=96)
-        gt = pm.ground_truth(scene, spp=256, cache_dir=cache)
-        hard = metrics.compare(renderer.render(scene, "hard"), gt)
-        pvm = metrics.compare(renderer.render(scene, "pvm"), gt)
+    for name, errors, _, _ in builtin_scenes_against_truth(renderer, tmp_path_factory.mktemp("gt"), 96, {"pvm": {"method": "pvm"}}):
+        hard, pvm = errors["hard"], errors["pvm"]
         # Measured at 128x128: PVM's penumbra RMSE is 0.30-0.55 of hard's.
         assert pvm["visibility_rmse_penumbra"] < 0.65 * hard["visibility_rmse_penumbra"], (name, pvm, hard)
         assert pvm["visibility_rmse"] < hard["visibility_rmse"], name

@@ -8,6 +8,7 @@ import pytest
 import penumbra
 from penumbra.comparison import RECOMMENDED
 from penumbra.scenes import box, ground_plane, ground_slab
+from stress_scenes import builtin_scenes_against_truth
 
 # The pvmf settings docs/real_meshes.md recommends (benchmarks/real_meshes.toml).
 PVMF_RECOMMENDED = RECOMMENDED["pvmf"]
@@ -177,16 +178,9 @@ def test_contact_hardening_on_the_resting_box(renderer: penumbra.Renderer) -> No
 
 
 def test_pvmf_beats_hard_against_ground_truth_on_every_builtin_scene(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
-    pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
-    from penumbra import metrics
-
-    cache = tmp_path_factory.mktemp("gt")
-    for name in penumbra.scenes.names():
-        scene = penumbra.scenes.get(name, width=128, height=128)
-        gt = pm.ground_truth(scene, spp=256, cache_dir=cache)
-        hard = metrics.compare(renderer.render(scene, "hard"), gt)["visibility_rmse_penumbra"]
-        paper = metrics.compare(renderer.render(scene, "pvmf"), gt)["visibility_rmse_penumbra"]
-        best = metrics.compare(renderer.render(scene, "pvmf", kernel="disk", n_blur=0), gt)["visibility_rmse_penumbra"]
+    settings = {"paper": {"method": "pvmf"}, "best": {"method": "pvmf", "kernel": "disk", "n_blur": 0}}
+    for name, errors, _, _ in builtin_scenes_against_truth(renderer, tmp_path_factory.mktemp("gt"), 128, settings):
+        hard, paper, best = (errors[k]["visibility_rmse_penumbra"] for k in ("hard", "paper", "best"))
         # Measured at 128x128 (hard: 0.27 everywhere): the paper's settings
         # reach 0.53-0.78 of hard's penumbra RMSE (its 13-pixel blur is wide
         # against these penumbrae), a disk kernel without blur 0.23-0.50. The

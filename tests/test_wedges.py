@@ -7,7 +7,7 @@ import pytest
 
 import penumbra
 from penumbra.scenes import box, ground_plane, ground_slab, sphere
-from stress_scenes import FAST, check_images
+from stress_scenes import FAST, builtin_scenes_against_truth, check_images
 from test_degenerate_geometry import CASES
 from test_pvm import disk_cut_visible_fraction, finned_box, long_edge_scene
 from test_real_meshes import SUITE, check_against_truth, truth, truth_of  # noqa: F401 (truth: a fixture)
@@ -189,18 +189,13 @@ def test_parameters_are_checked(renderer: penumbra.Renderer) -> None:
 
 
 def test_wedges_beat_hard_against_ground_truth_on_every_builtin_scene(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
-    pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
     from penumbra import metrics
 
-    cache = tmp_path_factory.mktemp("gt")
-    for name in penumbra.scenes.names():
-        scene = penumbra.scenes.get(name, width=96, height=96)
-        gt = pm.ground_truth(scene, spp=256, cache_dir=cache)
-        hard = metrics.compare(renderer.render(scene, "hard"), gt)
-        wedges = metrics.compare(renderer.render(scene, "wedges"), gt)
+    for name, errors, result, gt in builtin_scenes_against_truth(renderer, tmp_path_factory.mktemp("gt"), 96, {"wedges": {"method": "wedges"}}):
+        hard, wedges = errors["hard"], errors["wedges"]
         # Measured at 96x96: wedges' penumbra RMSE is 0.15-0.46 of hard's.
         assert wedges["visibility_rmse_penumbra"] < 0.55 * hard["visibility_rmse_penumbra"], (name, wedges, hard)
-        stray, out_of = metrics.stray_pixels(renderer.render(scene, "wedges").visibility, gt.visibility)
+        stray, out_of = metrics.stray_pixels(result.visibility, gt.visibility)
         assert stray <= 0.002 * out_of, (name, stray, out_of)
 
 

@@ -240,6 +240,46 @@ pub struct SceneSilhouette {
     pub connectivity: ConnectivityStats,
 }
 
+/// What every silhouette method reports of the silhouette it builds from
+/// (the stats of the same names; `named`).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct SilhouetteStats {
+    /// Silhouette edges found (hidden ones included).
+    pub silhouette_edges: usize,
+    /// Edges seen end-on from the light (no hard-shadow plane): nothing built.
+    pub light_parallel_edges: usize,
+    /// Silhouette edges hidden from the light's centre (nothing built;
+    /// counted in `silhouette_edges`).
+    pub hidden_edges: usize,
+    /// What connectivity found across the scene's meshes (issue 27).
+    pub connectivity: ConnectivityStats,
+}
+
+impl SilhouetteStats {
+    /// The stats of `edges` silhouette edges (the ones a method builds from).
+    pub fn of(edges: usize) -> Self {
+        Self { silhouette_edges: edges, ..Default::default() }
+    }
+
+    /// Adds what `silhouette` left out (its hidden edges) and found (connectivity).
+    pub fn add_scene(&mut self, silhouette: &SceneSilhouette) {
+        self.hidden_edges = silhouette.hidden_edges;
+        self.connectivity = silhouette.connectivity.clone();
+        self.silhouette_edges += silhouette.hidden_edges;
+    }
+
+    /// Stat names and values, as the methods report them.
+    pub fn named(&self) -> Vec<(&'static str, i64)> {
+        let mut out = vec![
+            ("silhouette_edges", self.silhouette_edges as i64),
+            ("light_parallel_edges", self.light_parallel_edges as i64),
+            ("hidden_silhouette_edges", self.hidden_edges as i64),
+        ];
+        out.extend(self.connectivity.named());
+        out
+    }
+}
+
 impl ConnectivityStats {
     /// The render stats that say what connectivity found (issue 27).
     pub fn named(&self) -> [(&'static str, i64); 8] {

@@ -141,7 +141,7 @@ fn check_volumes(params: &CaseParams) -> Result<(), TestCaseError> {
     let reach = 100.0 * scale;
     for cone in [false, true] {
         let VolumeGeometry { vertices, edges: points, stats } = penumbra_volumes(&edges, l, r, reach, cone);
-        prop_assert_eq!(stats.volume_quads, 2 * (edges.len() - stats.light_parallel_edges));
+        prop_assert_eq!(stats.volume_quads, 2 * (edges.len() - stats.silhouette.light_parallel_edges));
         prop_assert_eq!(vertices.len(), 6 * stats.volume_quads);
         prop_assert_eq!(points.len(), stats.volume_quads / 2);
         for v in &vertices {
@@ -179,7 +179,7 @@ fn check_volumes(params: &CaseParams) -> Result<(), TestCaseError> {
     for s_e in [0.5, 1.0] {
         for offsets in [Offsets::Unit, Offsets::Radius] {
             let (mask, stats) = mask_volumes(&edges, l, r, s_e, offsets, reach, true);
-            prop_assert_eq!(stats.mask_quads, 2 * (edges.len() - stats.light_parallel_edges));
+            prop_assert_eq!(stats.mask_quads, 2 * (edges.len() - stats.silhouette.light_parallel_edges));
             prop_assert!(mask.iter().all(|m| finite(&[m.position]) && m.d_e.is_finite() && m.d_e > 0.0 && m.d_local >= m.d_e && m.d_local.is_finite()));
         }
     }
@@ -266,7 +266,7 @@ fn collinear_silhouette_edges_use_the_coincident_plane_rule() {
     let l = DVec3::new(0.0, 5.0, 0.0);
     let edges: Vec<_> = (0..3).map(|i| edge(DVec3::new(i as f64, 1.0, 0.0), DVec3::new(i as f64 + 1.0, 1.0, 0.0), i, i + 1)).collect();
     let VolumeGeometry { vertices: v, stats, .. } = penumbra_volumes(&edges, l, 0.5, 10.0, true);
-    assert_eq!(stats.light_parallel_edges, 0);
+    assert_eq!(stats.silhouette.light_parallel_edges, 0);
     assert!(v.iter().all(|v| finite(&[v.position])));
     // The shared extrusion at vertex 1 is the single plane's ray from d through the vertex.
     let at_vertex_1: Vec<[f32; 3]> = v.chunks(6).filter(|q| q[0].position == [1.0, 1.0, 0.0]).map(|q| q[1].position).collect();
@@ -311,11 +311,11 @@ fn edges_parallel_to_the_light_direction_get_no_volume() {
         edge(DVec3::new(1e-12, 3.0, 0.0), DVec3::new(1.0, 3.0, 0.0), 2, 3),
     ];
     let VolumeGeometry { vertices: v, stats, .. } = penumbra_volumes(&edges, l, 0.5, 10.0, true);
-    assert_eq!(stats.light_parallel_edges, 2);
+    assert_eq!(stats.silhouette.light_parallel_edges, 2);
     assert_eq!(stats.volume_quads, 2);
     assert!(v.iter().all(|v| finite(&[v.position])));
     let (_, mstats) = mask_volumes(&edges, l, 0.5, 0.5, Offsets::Unit, 10.0, true);
-    assert_eq!(mstats.light_parallel_edges, 2);
+    assert_eq!(mstats.silhouette.light_parallel_edges, 2);
     all_finite_pvm_and_pvmf(&edges, l, 0.5);
 }
 

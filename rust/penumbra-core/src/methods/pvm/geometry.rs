@@ -40,18 +40,12 @@ pub struct VolumeGeometry {
 
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct VolumeStats {
-    pub silhouette_edges: usize,
+    /// Silhouette edges, end-on and hidden ones, connectivity.
+    pub silhouette: crate::silhouettes::SilhouetteStats,
     /// Quadrilaterals rendered (two per edge: outer and inner).
     pub volume_quads: usize,
     /// Silhouette vertices without exactly one incoming and one outgoing edge.
     pub junction_vertices: usize,
-    /// Edges seen end-on from the light (no hard-shadow plane): no volume.
-    pub light_parallel_edges: usize,
-    /// Silhouette edges hidden from the light's centre (no volume; counted
-    /// in `silhouette_edges`).
-    pub hidden_edges: usize,
-    /// What connectivity found across the scene's meshes (issue 27).
-    pub connectivity: crate::topology::ConnectivityStats,
     /// Quadrilateral corners whose neighbouring planes meet outside the
     /// vertex's light cone (`in_light_cone`): kept as the paper has them
     /// without repair "cone", each edge's own plane with it.
@@ -162,7 +156,7 @@ fn in_light_cone(v: DVec3, dir: DVec3, d: DVec3, l: DVec3, r: f64) -> DVec3 {
 /// extrusion vector lies in its vertex's light cone (`in_light_cone`);
 /// without, it is the paper's plane intersection alone.
 pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, cone: bool) -> VolumeGeometry {
-    let mut stats = VolumeStats { silhouette_edges: edges.len(), ..Default::default() };
+    let mut stats = VolumeStats { silhouette: crate::silhouettes::SilhouetteStats::of(edges.len()), ..Default::default() };
     let planes: Vec<Option<EdgePlanes>> = edges.iter().map(|e| edge_planes(e, l, r)).collect();
     // Loop connectivity: the incoming and outgoing edges of each vertex.
     let mut incoming: HashMap<u32, Vec<usize>> = HashMap::new();
@@ -190,7 +184,7 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, 
     let f = |p: DVec3| p.as_vec3().to_array();
     for (i, e) in edges.iter().enumerate() {
         let Some(own) = &planes[i] else {
-            stats.light_parallel_edges += 1;
+            stats.silhouette.light_parallel_edges += 1;
             continue;
         };
         // Extrusion vectors at a (shared with the incoming edge) and b (with the outgoing one).
@@ -296,7 +290,7 @@ mod tests {
             SilhouetteEdge { a: DVec3::new(2.0, 1.0, 0.0), b: DVec3::new(3.0, 1.0, 0.0), ia: 3, ib: 4, component: 0 },
         ];
         let VolumeGeometry { vertices, edges: points, stats } = penumbra_volumes(&edges, l, 0.5, 10.0, true);
-        assert_eq!(stats.light_parallel_edges, 1);
+        assert_eq!(stats.silhouette.light_parallel_edges, 1);
         assert!(vertices.iter().all(|v| v.position.iter().all(|c| c.is_finite()) && (v.edge as usize) < points.len()));
         assert!(points.iter().all(|p| p.h0.iter().chain(&p.h1).all(|c| c.is_finite())));
         // Radius 0: all planes coincide with the hard-shadow plane; still finite.

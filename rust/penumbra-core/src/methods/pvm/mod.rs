@@ -232,14 +232,11 @@ impl Method for PenumbraVolumeMaps {
             counter
         })?;
         let s = &volumes.stats;
-        frame.stat("silhouette_edges", s.silhouette_edges as i64);
-        frame.stat("penumbra_volumes", s.volume_quads as i64);
-        frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
-        frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
-        frame.stat("hidden_silhouette_edges", s.hidden_edges as i64);
-        for (name, value) in s.connectivity.named() {
+        for (name, value) in s.silhouette.named() {
             frame.stat(name, value);
         }
+        frame.stat("penumbra_volumes", s.volume_quads as i64);
+        frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("extrusions_outside_light_cone", s.extrusions_outside_cone as i64);
         frame.stat("silhouette_cache_hits", if fresh { volumes.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counter, &["pixels_in_volume"]);
@@ -272,9 +269,7 @@ impl PenumbraVolumeMaps {
                 // Beyond the far plane of every face (at most sqrt(3) far from the light).
                 let reach = 4.0 * projection.far() as f64 + 4.0 * r;
                 geometry = penumbra_volumes(&silhouette.edges, l, r, reach, params.repairs.cone);
-                geometry.stats.hidden_edges = silhouette.hidden_edges;
-                geometry.stats.connectivity = silhouette.connectivity;
-                geometry.stats.silhouette_edges += silhouette.hidden_edges;
+                geometry.stats.silhouette.add_scene(&silhouette);
             }
             // A storage binding may not be empty: one zeroed entry stands for no edges.
             let points = if geometry.edges.is_empty() { vec![EdgePoints { h0: [0.0; 4], h1: [0.0; 4] }] } else { std::mem::take(&mut geometry.edges) };

@@ -31,16 +31,10 @@ pub struct MaskVertex {
 
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct MaskStats {
-    pub silhouette_edges: usize,
+    /// Silhouette edges, end-on and hidden ones, connectivity.
+    pub silhouette: crate::silhouettes::SilhouetteStats,
     /// Quadrilaterals rendered (two per edge: outer and inner).
     pub mask_quads: usize,
-    /// Edges seen end-on from the light (no hard-shadow plane): no volume.
-    pub light_parallel_edges: usize,
-    /// Silhouette edges hidden from the light's centre (no volume; counted
-    /// in `silhouette_edges`).
-    pub hidden_edges: usize,
-    /// What connectivity found across the scene's meshes (issue 27).
-    pub connectivity: crate::topology::ConnectivityStats,
 }
 
 /// The overestimated volume of one silhouette edge `a -> b` (5.1), as its
@@ -98,11 +92,11 @@ fn edge_volume(e: &SilhouetteEdge, l: DVec3, r: f64, s_e: f64, offsets: Offsets,
 /// near its foot is then as wide as under its top, and the shadow of an
 /// object standing on the ground shows no contact hardening.
 pub fn mask_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, s_e: f64, offsets: Offsets, reach: f64, local_distance: bool) -> (Vec<MaskVertex>, MaskStats) {
-    let mut stats = MaskStats { silhouette_edges: edges.len(), ..Default::default() };
+    let mut stats = MaskStats { silhouette: crate::silhouettes::SilhouetteStats::of(edges.len()), ..Default::default() };
     let mut vertices = Vec::with_capacity(edges.len() * 12);
     for e in edges {
         let Some(quads) = edge_volume(e, l, r, s_e, offsets, reach) else {
-            stats.light_parallel_edges += 1;
+            stats.silhouette.light_parallel_edges += 1;
             continue;
         };
         // d_e = min(|e0 - l|, |e1 - l|) of the original points (5.1).
@@ -196,7 +190,7 @@ mod tests {
         for s_e in [1e-6, 0.5, 1.0] {
             for offsets in [Offsets::Unit, Offsets::Radius] {
                 let (vertices, stats) = mask_volumes(&edges, l, 0.5, s_e, offsets, 10.0, true);
-                assert_eq!(stats.light_parallel_edges, 2);
+                assert_eq!(stats.silhouette.light_parallel_edges, 2);
                 assert_eq!(stats.mask_quads, 2);
                 assert!(vertices.iter().all(|v| v.position.iter().all(|c| c.is_finite()) && v.d_e > 0.0));
             }

@@ -364,13 +364,10 @@ impl Method for PenumbraVolumeMaskFiltering {
             estimate.raw.clone()
         };
         let s = &mask.stats;
-        frame.stat("silhouette_edges", s.silhouette_edges as i64);
-        frame.stat("mask_quads", s.mask_quads as i64);
-        frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
-        frame.stat("hidden_silhouette_edges", s.hidden_edges as i64);
-        for (name, value) in s.connectivity.named() {
+        for (name, value) in s.silhouette.named() {
             frame.stat(name, value);
         }
+        frame.stat("mask_quads", s.mask_quads as i64);
         frame.stat("silhouette_cache_hits", if fresh_mask { mask.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counters, &COUNTERS);
         frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth, projection.far()));
@@ -400,9 +397,7 @@ impl PenumbraVolumeMaskFiltering {
                 // Beyond the far plane from any moved point (they lie between l and the edges).
                 let reach = 4.0 * projection.far() as f64 + 4.0 * r;
                 (vertices, stats) = mask_volumes(&silhouette.edges, l, r, params.s_e, params.offsets, reach, params.repairs.distance);
-                stats.hidden_edges = silhouette.hidden_edges;
-                stats.connectivity = silhouette.connectivity;
-                stats.silhouette_edges += silhouette.hidden_edges;
+                stats.silhouette.add_scene(&silhouette);
             }
             // The moved points lie between the light and the edges, nearer than
             // the scene's near plane: clip only what is (almost) at the light.

@@ -43,8 +43,8 @@ crate::gpu_type! {
 
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct WedgeStats {
-    /// Silhouette edges found (hidden ones included).
-    pub silhouette_edges: usize,
+    /// Silhouette edges, end-on and hidden ones, connectivity.
+    pub silhouette: crate::silhouettes::SilhouetteStats,
     /// Wedges built (silhouette edges with a wedge plus extra wedges).
     pub wedges: usize,
     /// Extra wedges at acute vertices (`acute_wedges`).
@@ -54,15 +54,9 @@ pub struct WedgeStats {
     /// Silhouette vertices without exactly one incoming and one outgoing
     /// edge: their wedges end in a side plane of their own.
     pub junction_vertices: usize,
-    /// Edges seen end-on from the light: no wedge.
-    pub light_parallel_edges: usize,
     /// Shared side lines (front-front or back-back plane intersections)
     /// replaced because they were degenerate or outside the vertex's light cone.
     pub side_fallbacks: usize,
-    /// Silhouette edges hidden from the light's centre (no wedge).
-    pub hidden_edges: usize,
-    /// What connectivity found across the scene's meshes (issue 27).
-    pub connectivity: crate::topology::ConnectivityStats,
     /// (wedge, tile) pairs in the binning.
     pub binned: usize,
 }
@@ -248,7 +242,7 @@ fn point4(p: DVec3) -> [f32; 4] {
 /// `acute_wedges` extra wedges per 120 degrees of turn at acute vertices;
 /// `cone` replaces shared side lines outside the vertex's light cone.
 pub fn penumbra_wedges(edges: &[SilhouetteEdge], l: DVec3, r: f64, acute_wedges: u32, cone: bool) -> Wedges {
-    let mut stats = WedgeStats { silhouette_edges: edges.len(), ..Default::default() };
+    let mut stats = WedgeStats { silhouette: crate::silhouettes::SilhouetteStats::of(edges.len()), ..Default::default() };
     // Edges with an SV quad, by silhouette edge.
     let mut built: Vec<(usize, WedgeEdge)> = Vec::with_capacity(edges.len());
     // Grouped by connected surface (stable), so that every tile's list holds
@@ -261,7 +255,7 @@ pub fn penumbra_wedges(edges: &[SilhouetteEdge], l: DVec3, r: f64, acute_wedges:
         let len = along.length();
         match (len > 0.0).then(|| edge_planes(e.a, e.b, along / len, l, r)).flatten() {
             Some(w) => built.push((i, w)),
-            None => stats.light_parallel_edges += 1,
+            None => stats.silhouette.light_parallel_edges += 1,
         }
     }
     // Loops: an edge ending at v continues into the edge starting at v when
@@ -774,7 +768,7 @@ mod tests {
         ];
         for r in [1e-9, 0.5, 3.0] {
             let w = penumbra_wedges(&edges, l, r, 8, true);
-            assert_eq!(w.stats.light_parallel_edges, 1);
+            assert_eq!(w.stats.silhouette.light_parallel_edges, 1);
             for x in &w.wedges {
                 let all = [x.a, x.b, x.dir, x.front, x.back, x.hard, x.left, x.right, x.u_left, x.u_right];
                 assert!(all.iter().flatten().all(|c| c.is_finite()), "{x:?}");

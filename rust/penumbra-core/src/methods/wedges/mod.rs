@@ -291,16 +291,13 @@ impl Method for PenumbraWedges {
             counter
         })?;
         let s = &wedges.stats;
-        frame.stat("silhouette_edges", s.silhouette_edges as i64);
+        for (name, value) in s.silhouette.named() {
+            frame.stat(name, value);
+        }
         frame.stat("wedges", s.wedges as i64);
         frame.stat("extra_wedges", s.extra_wedges as i64);
         frame.stat("culled_wedges", s.culled_wedges as i64);
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
-        frame.stat("light_parallel_edges", s.light_parallel_edges as i64);
-        frame.stat("hidden_silhouette_edges", s.hidden_edges as i64);
-        for (name, value) in s.connectivity.named() {
-            frame.stat(name, value);
-        }
         frame.stat("side_line_fallbacks", s.side_fallbacks as i64);
         frame.stat("binned_wedge_tiles", s.binned as i64);
         frame.stat("silhouette_cache_hits", if fresh { wedges.silhouette_cache_hits as i64 } else { 0 });
@@ -325,9 +322,7 @@ impl PenumbraWedges {
                 // Coverage measures a corner exactly: extra wedges there would add nothing.
                 let acute = if params.intensity == Intensity::Coverage { 0 } else { params.acute_wedges };
                 built = penumbra_wedges(&silhouette.edges, l, r, acute, params.repairs.cone);
-                built.stats.hidden_edges = silhouette.hidden_edges;
-                built.stats.connectivity = silhouette.connectivity;
-                built.stats.silhouette_edges += silhouette.hidden_edges;
+                built.stats.silhouette.add_scene(&silhouette);
             }
             let camera = ctx.camera;
             let (projection, _, _) = camera.projection(ctx.prepared.bounds_min, ctx.prepared.bounds_max);
