@@ -8,6 +8,7 @@ import os
 import pytest
 
 import penumbra
+from stress_scenes import new_renderer
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
@@ -27,7 +28,4 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 @pytest.fixture(scope="session")
 def renderer() -> penumbra.Renderer:
-    try:
-        return penumbra.Renderer()
-    except penumbra.GpuUnavailableError as e:
-        pytest.skip(f"no GPU adapter: {e}")
+    return new_renderer()

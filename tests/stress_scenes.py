@@ -37,6 +37,15 @@ NOT_YET = next((m for m in penumbra.methods(implemented_only=False) if m not in 
 MESHES = Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes"
 
 
+def new_renderer(**options: Any) -> penumbra.Renderer:
+    """A renderer with `options`, or the test skipped, with the reason, on a
+    machine without a GPU adapter."""
+    try:
+        return penumbra.Renderer(**options)
+    except penumbra.GpuUnavailableError as e:
+        pytest.skip(f"no GPU adapter: {e}")
+
+
 def check_images(result: penumbra.RenderResult, what: str = "") -> None:
     """No NaN or Inf in any image; visibility in [0, 1]; radiance >= 0."""
     for key, image in result.images.items():

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import penumbra
+from stress_scenes import new_renderer
 
 pytestmark = pytest.mark.gpu
 
@@ -19,18 +20,12 @@ MAP = 128
 
 @pytest.fixture(scope="module")
 def cached() -> penumbra.Renderer:
-    try:
-        return penumbra.Renderer(pass_cache=True)
-    except penumbra.GpuUnavailableError as e:
-        pytest.skip(f"no GPU adapter: {e}")
+    return new_renderer(pass_cache=True)
 
 
 @pytest.fixture(scope="module")
 def uncached() -> penumbra.Renderer:
-    try:
-        return penumbra.Renderer(pass_cache=False)
-    except penumbra.GpuUnavailableError as e:
-        pytest.skip(f"no GPU adapter: {e}")
+    return new_renderer(pass_cache=False)
 
 
 def scene(name: str = "overlapping_casters", **kw: Any) -> penumbra.Scene:
