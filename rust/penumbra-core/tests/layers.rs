@@ -8,7 +8,9 @@
 //! from the sources' `crate::` paths (comments left out).
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::{Path, PathBuf};
+
+mod common;
+use common::src;
 
 /// Layers from the top (0) down: a path prefix under `src/` and its rank.
 const LAYERS: &[(&str, u32)] = &[
@@ -33,21 +35,6 @@ const LAYERS: &[(&str, u32)] = &[
     ("error.rs", 10),
 ];
 
-fn src() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
-}
-
-fn rust_files(dir: &Path, out: &mut Vec<String>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            rust_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path.strip_prefix(src()).unwrap().to_string_lossy().replace('\\', "/"));
-        }
-    }
-}
-
 fn rank(file: &str) -> u32 {
     LAYERS.iter().find(|(prefix, _)| file.starts_with(prefix)).unwrap_or_else(|| panic!("{file}: in no layer of tests/layers.rs")).1
 }
@@ -62,9 +49,7 @@ fn file_of(path: &[&str], files: &BTreeSet<String>) -> Option<String> {
 
 /// Every file each file uses through `crate::` paths.
 fn uses() -> BTreeMap<String, BTreeSet<String>> {
-    let mut list = Vec::new();
-    rust_files(&src(), &mut list);
-    let files: BTreeSet<String> = list.into_iter().collect();
+    let files = common::files_under_src("rs");
     let mut out = BTreeMap::new();
     for file in &files {
         let text = std::fs::read_to_string(src().join(file)).unwrap();

@@ -6,19 +6,8 @@
 //! WGSL twin. No GPU needed.
 
 use std::collections::BTreeSet;
-use std::path::Path;
 
-fn wgsl_files(dir: &Path, out: &mut BTreeSet<String>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            wgsl_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "wgsl") {
-            let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-            out.insert(path.strip_prefix(&src).unwrap().to_string_lossy().replace('\\', "/"));
-        }
-    }
-}
+mod common;
 
 #[test]
 fn every_shader_validates_with_naga() {
@@ -39,8 +28,7 @@ fn every_shader_validates_with_naga() {
 
 #[test]
 fn every_wgsl_file_is_listed_and_validated() {
-    let mut on_disk = BTreeSet::new();
-    wgsl_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"), &mut on_disk);
+    let on_disk = common::files_under_src("wgsl");
     assert!(!on_disk.is_empty());
     let listed: BTreeSet<String> = penumbra_core::shaders::FILES.iter().map(|(p, _)| p.to_string()).collect();
     assert_eq!(on_disk, listed, "build.rs lists exactly the .wgsl files under src/");
