@@ -45,20 +45,7 @@ _private_runtime_dir()
 # Imports after the runtime directory is set: the core may start Vulkan.
 from penumbra import errors, metrics, scenes
 from penumbra._core import __version__
-from penumbra.errors import (
-    CameraError,
-    GpuError,
-    GpuFeatureError,
-    GpuUnavailableError,
-    GroundTruthError,
-    InvalidInputError,
-    LightError,
-    MeshError,
-    ParameterError,
-    PenumbraError,
-    PenumbraIOError,
-    SceneError,
-)
+from penumbra.errors import *  # noqa: F403 (the exception hierarchy: penumbra.errors.__all__)
 from penumbra.render import MethodInfo, Param, Renderer, RenderResult, adapter_info, method_info, methods, write_image
 from penumbra.scene import Camera, Mesh, Scene, SphereLight
 from penumbra.sweep import sweep
@@ -82,19 +69,8 @@ __all__ = [
     "Mesh",
     "Scene",
     "SphereLight",
-    "PenumbraError",
-    "InvalidInputError",
-    "MeshError",
-    "LightError",
-    "CameraError",
-    "SceneError",
-    "ParameterError",
-    "GpuUnavailableError",
-    "GpuError",
-    "GpuFeatureError",
-    "PenumbraIOError",
-    "GroundTruthError",
 ]
+__all__ += errors.__all__
 
 
 def compare(*args: Any, **kwargs: Any) -> Any:
