@@ -264,7 +264,7 @@ impl SilhouetteStats {
     /// Adds what `silhouette` left out (its hidden edges) and found (connectivity).
     pub fn add_scene(&mut self, silhouette: &SceneSilhouette) {
         self.hidden_edges = silhouette.hidden_edges;
-        self.connectivity = silhouette.connectivity.clone();
+        self.connectivity = silhouette.connectivity;
         self.silhouette_edges += silhouette.hidden_edges;
     }
 
