@@ -3,6 +3,7 @@ under a rotation of the whole scene, over `penumbra.rooms.room_suite`.
 
     python benchmarks/rooms.py                       # 64x64, every method, the table
     python benchmarks/rooms.py --methods pcss pcf --scenes "corridor middle"
+    python benchmarks/rooms.py --size 32 --methods pcss --param blocker_test=cone
 
 Prints, per method, the worst and the mean over the scenes of the fraction
 of pixels off the truth (`reference` at 1024 samples) by more than 0.1, and
@@ -18,6 +19,7 @@ import numpy as np
 
 import penumbra
 from penumbra import rooms
+from penumbra.cli import _param
 
 METHODS = ["pcf", "pcss", "pvm", "pvmf", "wedges", "backprojection", "adaptive", "reference"]
 # `reference` at low samples: the cheap way to the truth, beside the soft methods.
@@ -50,14 +52,16 @@ def main() -> None:
     parser.add_argument("--methods", nargs="*", default=METHODS)
     parser.add_argument("--scenes", nargs="*", help="scene names of the suite (all by default)")
     parser.add_argument("--truth-samples", type=int, default=rooms.TRUTH_SAMPLES)
+    parser.add_argument("--param", action="append", type=_param, default=[], metavar="KEY=VALUE", help="a parameter of every method given (repeatable)")
     args = parser.parse_args()
+    params = {m: {**PARAMS.get(m, {}), **dict(args.param)} for m in args.methods}
     # The Cornell box's scenes come from the shared meshes (penumbra.scenes.meshes_folder), where present.
     meshes = penumbra.scenes.meshes_folder()
     cornell = meshes / "CornellBox-Original.obj" if meshes is not None else None
     suite = rooms.room_suite(args.size, str(cornell) if cornell is not None and cornell.exists() else None)
     if args.scenes:
         suite = {k: v for k, v in suite.items() if k in args.scenes}
-    rows = rooms.measure(penumbra.Renderer(), suite, args.methods, params=PARAMS, truth_samples=args.truth_samples)
+    rows = rooms.measure(penumbra.Renderer(), suite, args.methods, params=params, truth_samples=args.truth_samples)
     print(f"## {len(suite)} room scenes at {args.size}x{args.size}, truth: reference at {args.truth_samples} samples\n")
     print(table(rows))
     print("\n| scene | method | off | off rotated | moved | truth moved |\n|---|---|---|---|---|---|")

@@ -20,8 +20,8 @@ use glam::{DVec3, Vec3};
 
 use crate::error::{Error, Result};
 use crate::gpu::formats;
-use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
 use crate::gpu::{PassTimestamps, Profiler};
+use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
 use crate::light_frustum::{LightProjection, ProjectionMode};
 use crate::pass_cache::{Entry, PassCache, PassKey};
 use crate::scene::{Camera, PreparedScene, Scene};

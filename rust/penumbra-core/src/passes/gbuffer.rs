@@ -3,8 +3,8 @@
 
 use crate::frame::FrameContext;
 use crate::gpu::{formats, layout};
-use crate::gpu::pool::{Binding, Layout, ResourcePool};
 use crate::gpu::PassTimestamps;
+use crate::gpu::pool::{Binding, Layout, ResourcePool};
 use crate::pass_cache::CachedPass;
 
 /// The G-buffer as the pass cache keeps it: two cameras (or image sizes) alternating.

@@ -2,8 +2,8 @@
 //! and a method's visibility image, writes linear radiance.
 
 use crate::frame::FrameContext;
-use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
 use crate::gpu::{formats, layout, PassTimestamps};
+use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
 use crate::passes::screen::ScreenPass;
 
 

@@ -9,8 +9,8 @@
 use std::sync::Arc;
 
 use crate::frame::FrameContext;
-use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool};
 use crate::gpu::{formats, layout, PassTimestamps};
+use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool};
 use crate::light_frustum::{LightFrustum, LightProjection};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

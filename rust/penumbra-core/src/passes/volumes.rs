@@ -5,10 +5,10 @@
 
 use crate::error::{Error, Result};
 use crate::frame::FrameContext;
-use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool};
-use crate::gpu::{layout, PassTimestamps};
-use crate::light_frustum::{LightFrustum, LightProjection};
 use crate::gpu::formats;
+use crate::gpu::{layout, PassTimestamps};
+use crate::gpu::pool::{Binding, Layout, PooledTexture, ResourcePool};
+use crate::light_frustum::{LightFrustum, LightProjection};
 use crate::passes::shadow_map::{shadow_uniforms, uniform_buffer, ShadowMapPass};
 
 pub struct VolumePass {

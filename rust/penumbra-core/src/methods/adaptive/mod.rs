@@ -33,17 +33,17 @@ use glam::{DVec2, DVec3, Vec3};
 
 use crate::error::{Error, Result};
 use crate::frame::{Frame, FrameContext, Intermediate};
+use crate::gpu::formats;
 use crate::gpu::layout;
-use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
 use crate::gpu::PassTimestamps;
+use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
 use crate::light_frustum::{light_sample_error, LightProjection, ProjectionMode};
 use crate::light_sampling::{disk_point, scene_axis};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
+use crate::passes::centre_map;
 use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
-use crate::gpu::formats;
-use crate::passes::centre_map;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
 

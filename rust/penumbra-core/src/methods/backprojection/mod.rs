@@ -29,18 +29,18 @@ use std::sync::Arc;
 
 use crate::error::{Error, Result};
 use crate::frame::{Frame, FrameContext, Intermediate};
+use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, Layout, PooledBuffer, PooledTexture, ResourcePool};
 use crate::light_frustum::LightProjection;
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec, ParamValue};
 use crate::pass_cache::{CachedPass, PassKey};
-use crate::passes::screen::ScreenPass;
-use crate::gpu::formats;
-use crate::passes::object_map::{self, OBJECT_MAP};
-use crate::passes::volumes::VolumePass;
 use crate::passes::centre_map::{self, CENTRE_MAP};
+use crate::passes::object_map::{self, OBJECT_MAP};
+use crate::passes::screen::ScreenPass;
 use crate::passes::shadow_test::ShadowMapSettings;
+use crate::passes::volumes::VolumePass;
 
 /// The min/max hierarchy of the centre map, as the pass cache keeps it.
 pub const HIERARCHY: CachedPass = CachedPass { name: "hierarchy", capacity: 3 };

@@ -12,15 +12,15 @@
 
 use crate::error::Result;
 use crate::frame::Frame;
+use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
+use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
-use crate::gpu::formats;
-use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::shadow_test::ShadowMapSettings;
 
 #[derive(Debug, Clone, PartialEq)]

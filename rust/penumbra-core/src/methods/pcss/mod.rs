@@ -16,18 +16,18 @@
 
 use crate::error::{Error, Result};
 use crate::frame::{Frame, Intermediate};
+use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
+use crate::passes::centre_map::{self, CENTRE_MAP};
+use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
-use crate::gpu::formats;
-use crate::passes::object_map::{self, OBJECT_MAP};
-use crate::passes::centre_map::{self, CENTRE_MAP};
-use crate::passes::volumes::VolumePass;
 use crate::passes::shadow_test::ShadowMapSettings;
+use crate::passes::volumes::VolumePass;
 
 /// Points in the Poisson-disk set of `methods/pcss/visibility.wgsl`.
 pub const POISSON_POINTS: u32 = 64;

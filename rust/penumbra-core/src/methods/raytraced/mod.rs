@@ -39,13 +39,13 @@ use glam::DVec3;
 use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::gpu::context::{ray_queries_disabled, RAY_QUERY_ENV};
+use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::light_sampling::{light_samples, scene_sphere_samples, SampleUniform, DEFAULT_RAY_OFFSET};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
-use crate::gpu::formats;
 
 use acceleration::AccelerationCache;
 

@@ -34,17 +34,17 @@ use glam::{DVec3, Vec3};
 
 use crate::error::Result;
 use crate::frame::Frame;
+use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::gpu::pool::PooledTexture;
 use crate::light_frustum::{light_sample_error, LightProjection};
+use crate::light_sampling::{light_samples, scene_axis, scene_sphere_samples, LightSample, Strata};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
-use crate::gpu::formats;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
-use crate::light_sampling::{light_samples, scene_axis, scene_sphere_samples, LightSample, Strata};
 
 /// Where the light samples lie (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

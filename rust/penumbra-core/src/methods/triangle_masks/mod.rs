@@ -44,13 +44,13 @@ use glam::{DVec3, Vec3};
 
 use crate::error::Result;
 use crate::frame::Frame;
+use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::light_sampling::{scene_sphere_samples, LightSample, SampleUniform, DEFAULT_RAY_OFFSET};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
-use crate::gpu::formats;
 
 /// Pixels per tile side and tiles per group side (masks.wgsl's TILE, GROUP).
 pub const TILE: u32 = 16;

@@ -37,17 +37,17 @@ use glam::DMat4;
 
 use crate::error::Result;
 use crate::frame::{Frame, Intermediate};
+use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledBuffer};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
-use crate::passes::screen::ScreenPass;
-use crate::gpu::formats;
-use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::centre_map::{self, CENTRE_MAP};
-use crate::passes::volumes::VolumePass;
+use crate::passes::object_map::{self, OBJECT_MAP};
+use crate::passes::screen::ScreenPass;
 use crate::passes::shadow_test::ShadowMapSettings;
+use crate::passes::volumes::VolumePass;
 use crate::silhouettes::{OpenEdges, Repairs};
 
 pub mod geometry;
