@@ -12,7 +12,6 @@ use crate::frame::Frame;
 use crate::gpu::pool::{PooledTexture, ResourcePool};
 use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
-use crate::shaders::GpuStruct;
 
 /// What a method's passes leave for the renderer: the visibility image
 /// (visibility-format, the camera's size) that shading reads and readback returns.
@@ -50,12 +49,6 @@ pub trait Method: Send + Sync + Sized + 'static {
         &[]
     }
 
-    /// The Rust structs it uploads for its shaders, with their WGSL twins
-    /// (checked against naga's layouts by `tests/shader_validation.rs`).
-    fn gpu_structs() -> Vec<GpuStruct> {
-        Vec::new()
-    }
-
     /// Builds its pipelines.
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self;
 
@@ -83,7 +76,6 @@ pub struct Registered {
     pub paper: &'static str,
     pub specs: fn() -> Vec<ParamSpec>,
     pub cached_passes: fn() -> &'static [CachedPass],
-    pub gpu_structs: fn() -> Vec<GpuStruct>,
     pub(crate) parse: fn(&ParamSet) -> Result<Arc<dyn Any + Send + Sync>>,
     pub(crate) build: fn(&wgpu::Device, &ResourcePool) -> Box<dyn DynMethod>,
 }
@@ -103,7 +95,6 @@ pub const fn entry<M: Method>() -> Registered {
         paper: M::PAPER,
         specs: M::specs,
         cached_passes: M::cached_passes,
-        gpu_structs: M::gpu_structs,
         parse: parse_typed::<M>,
         build: build::<M>,
     }

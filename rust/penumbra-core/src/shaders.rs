@@ -29,8 +29,8 @@
 //! shader a pipeline is built from; `tests/shader_validation.rs` composes
 //! and validates each one with naga, checks that every file is used, and
 //! checks every Rust uniform and storage struct against naga's layout of its
-//! WGSL twin ([`GpuStruct`]: each module lists its own, `passes::gpu_structs`
-//! and `Method::gpu_structs`).
+//! WGSL twin ([`GpuStruct`]: a module declares its own with [`gpu_type!`],
+//! and build.rs finds every declaration, as it finds the WGSL files).
 
 use std::collections::BTreeSet;
 

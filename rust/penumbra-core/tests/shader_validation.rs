@@ -45,10 +45,10 @@ fn every_wgsl_file_is_listed_and_validated() {
 /// the WGSL struct's member of the same name, and the sizes agree.
 #[test]
 fn rust_structs_match_their_wgsl_layouts() {
-    let mut structs = penumbra_core::passes::gpu_structs();
-    structs.extend(penumbra_core::REGISTRY.iter().flat_map(|r| (r.gpu_structs)()));
-    assert!(structs.len() >= 10);
-    for s in structs {
+    // Every `gpu_type!` under src/, found by build.rs (no list kept by hand).
+    let structs: &[fn() -> penumbra_core::shaders::GpuStruct] = include!(concat!(env!("OUT_DIR"), "/gpu_structs.rs"));
+    assert!(structs.len() >= 20, "build.rs found {} gpu_type! declarations", structs.len());
+    for s in structs.iter().map(|f| f()) {
         let source = penumbra_core::shaders::compose(s.file);
         let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}: {}", s.file, e.emit_to_string(&source)));
         let mut layouter = naga::proc::Layouter::default();

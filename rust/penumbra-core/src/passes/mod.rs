@@ -27,16 +27,3 @@ pub fn corner_layout(attributes: &[wgpu::VertexAttribute]) -> wgpu::VertexBuffer
 pub fn mat4(m: glam::Mat4) -> [[f32; 4]; 4] {
     m.to_cols_array_2d()
 }
-
-/// The Rust structs the shared passes and shaders upload, with their WGSL
-/// twins (the methods list theirs: `Method::gpu_structs`).
-pub fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-    vec![
-        crate::light_sampling::SampleUniform::gpu_struct(),
-        shadow_map::LightSpaceUniform::gpu_struct(),
-        shadow_map::ShadowUniforms::gpu_struct(),
-        shadow_test::ShadowTestUniform::gpu_struct(),
-        gbuffer::CameraUniforms::gpu_struct(),
-        shading::ShadingUniforms::gpu_struct(),
-    ]
-}

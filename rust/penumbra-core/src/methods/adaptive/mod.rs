@@ -348,10 +348,6 @@ impl Method for AdaptiveShadows {
     const PAPER: &'static str = "adaptive light-source sampling (Schwarzler et al. 2013, 3.2-3.4)";
     type Params = AdaptiveParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![CellCompareUniform::gpu_struct()]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         let mut specs: Vec<ParamSpec> = ShadowMapSettings::specs("slope")
             .into_iter()

@@ -223,15 +223,6 @@ impl Method for SoftShadowBackprojection {
         min/max shadow-map hierarchy, marching-squares contours, radial area integration, light- and screen-space multi-resolution";
     type Params = BackprojectionParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            BackprojectionUniform::gpu_struct(),
-            HierarchyLevelUniform::gpu_struct(),
-            DiscontinuityUniform::gpu_struct(),
-            PullPushUniform::gpu_struct(),
-        ]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         // The paper's maps are 1k x 1k (section 7.1: the hierarchy of a 1k x 1k
         // map in under 1 ms); its reference averages 2k x 2k maps.

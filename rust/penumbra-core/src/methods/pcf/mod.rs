@@ -52,10 +52,6 @@ impl Method for PercentageCloserFiltering {
     const PAPER: &'static str = "percentage-closer filtering (Reeves et al. 1987; Cournia 3.4), fixed kernel";
     type Params = PcfParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![PcfUniform::gpu_struct()]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         ShadowMapSettings::specs_and("slope", [
             ParamSpec::float("kernel", 5.0, 0.0, 256.0, "kernel width in shadow-map texels"),

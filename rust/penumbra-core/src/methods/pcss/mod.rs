@@ -100,10 +100,6 @@ impl Method for PercentageCloserSoftShadows {
     const PAPER: &'static str = "percentage-closer soft shadows (Fernando 2005): blocker search, penumbra estimate, variable PCF";
     type Params = PcssParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![PcssUniform::gpu_struct()]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         ShadowMapSettings::specs_and("slope", [
             ParamSpec::int("blocker_samples", 4, 1, 32, "taps per axis of the blocker search (at most 8 with 'poisson')"),

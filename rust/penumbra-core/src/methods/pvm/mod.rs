@@ -125,10 +125,6 @@ impl Method for PenumbraVolumeMaps {
     const PAPER: &'static str = "penumbra volume maps (Cournia ch. 4)";
     type Params = PvmParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![EdgePoints::gpu_struct()]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         ShadowMapSettings::specs_and("slope", [
             ParamSpec::bool("falloff", true, "the 3k^2 - 2k^3 interpolant of 4.2 (false: the disk fraction k)"),

@@ -181,13 +181,6 @@ impl Method for PenumbraVolumeMaskFiltering {
     const PAPER: &'static str = "penumbra volume mask filtering (Cournia ch. 5)";
     type Params = PvmfParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            SettingsUniform::gpu_struct(),
-            BlurUniform::gpu_struct(),
-        ]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         // Departure from 5.5 (second-depth maps): `slope`, the default of
         // `hard`. A closed caster thinner than the depth a texel spans along

@@ -116,10 +116,6 @@ impl Method for RaytracedShadows {
         with reference's sphere sampling";
     type Params = RaytracedParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![RaySettingsUniform::gpu_struct()]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         vec![
             ParamSpec::int("n_samples", 256, 1, 65536, "shadow rays per pixel, one per light sample of reference's sphere sampling (rounded up to full stratified grids)"),

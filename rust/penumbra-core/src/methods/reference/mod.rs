@@ -99,10 +99,6 @@ impl Method for ReferenceShadows {
     const PAPER: &'static str = "accumulation of hard shadows from n light samples (Herf 3.4, 4.2; Schwarzler et al. Eq. 1-2)";
     type Params = ReferenceParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![SampleWeightUniform::gpu_struct()]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         ShadowMapSettings::specs_and("slope", [
             ParamSpec::int("n_samples", 256, 1, 4096, "light samples (rounded up to a full stratified grid)"),

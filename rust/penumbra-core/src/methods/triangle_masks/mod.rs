@@ -162,10 +162,6 @@ impl Method for TriangleMasks {
         exact at reference's sphere samples, without ray queries";
     type Params = TriangleMaskParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![MaskSettingsUniform::gpu_struct()]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         vec![
             ParamSpec::int("n_samples", 256, 1, 4096, "light samples of reference's sphere sampling, one mask bit each (rounded up to full stratified grids)"),

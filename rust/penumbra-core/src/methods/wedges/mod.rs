@@ -144,13 +144,6 @@ impl Method for PenumbraWedges {
     const PAPER: &'static str = "penumbra wedges (Akenine-Möller & Assarsson 2002, 4.1-4.2; per-pixel coverage of Assarsson & Akenine-Möller 2003)";
     type Params = WedgesParams;
 
-    fn gpu_structs() -> Vec<crate::shaders::GpuStruct> {
-        vec![
-            WedgeGpu::gpu_struct(),
-            WedgeSettingsUniform::gpu_struct(),
-        ]
-    }
-
     fn specs() -> Vec<ParamSpec> {
         ShadowMapSettings::specs_and("slope", [
             ParamSpec::int(
