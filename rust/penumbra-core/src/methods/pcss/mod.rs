@@ -45,7 +45,8 @@ impl Sampling {
 /// Which texels of the blocker search are blockers: `Plane`, the paper's,
 /// those nearer the light than the receiver's plane; `Cone`, of those, the
 /// ones inside the cone from the receiver to the light at their own depth
-/// (the only points that can hide part of the light from it).
+/// (the only points that can hide part of the light from it), found by taps
+/// spread by scale (`visibility.wgsl`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BlockerTest {
     Plane,
@@ -111,7 +112,7 @@ impl Method for PercentageCloserSoftShadows {
                 "blocker_test",
                 "plane",
                 &BlockerTest::NAMES,
-                "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers)",
+                "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers; its taps spread by scale, as many per octave of the search radius)",
             ),
             ParamSpec::bool(
                 "horizon",

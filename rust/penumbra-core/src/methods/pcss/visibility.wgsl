@@ -186,8 +186,36 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssP
     let nb = pcss.blocker_samples;
     var blocker_sum = 0.0;
     var blockers = 0u;
-    for (var i = 0u; i < nb * nb; i++) {
-        let offset = search * disk_tap(px, i, nb, BLOCKER_STREAM, rot);
+    // blocker_test "cone" also spreads the taps by scale: a point at depth z
+    // can hide part of the light only within the cone's projection there,
+    // R(z) = radius (d_r - z) / d_r / texel(z) texels, which shrinks from
+    // `search` at z = near to 0 at z = d_r. Uniform taps over the near
+    // disk, where `near` is the nearest geometry (a cube's, or a light close
+    // under a shelf), mostly land far outside R(z) of a blocker close to the
+    // receiver and find none; so a tap at distance rho in the unit disk goes
+    // to search^rho texels from the receiver (search >= 1; else 1): as many
+    // taps per octave of reach, and the receiver's own texel (the centre
+    // ray) is read first.
+    // The found depths are averaged unweighted: weighting each by the map
+    // area its tap stands for (Fernando's area mean), or by the part of the
+    // light it hides, measured worse on the room suite (4.8% and 6.7% of
+    // pixels off at worst, against 3.5%).
+    let cone = pcss.cone == 1u;
+    let octaves = log2(max(search, 1.0));
+    var first = 0u;
+    if (cone) {
+        first = 1u;
+    }
+    for (var i = 0u; i < nb * nb + first; i++) {
+        var offset = vec2<f32>(0.0);
+        if (!cone) {
+            offset = search * disk_tap(px, i, nb, BLOCKER_STREAM, rot);
+        } else if (i > 0u) {
+            let tap = disk_tap(px, i - 1u, nb, BLOCKER_STREAM, rot);
+            let rho = length(tap);
+            // The division is safe (max); the reach is at most `search`.
+            offset = select(vec2<f32>(0.0), tap * (min(exp2(rho * octaves), search) / max(rho, 1e-6)), rho > 1e-6);
+        }
         let b = texel_blocker(r, r.coords + offset);
         var blocker = b.z < b.plane - r.bias;
         // blocker_test "cone" (a departure from Fernando 2005, step 1, which
