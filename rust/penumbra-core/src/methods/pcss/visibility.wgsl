@@ -202,10 +202,7 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssP
     // pixels off at worst, against 3.5%).
     let cone = pcss.cone == 1u;
     let octaves = log2(max(search, 1.0));
-    var first = 0u;
-    if (cone) {
-        first = 1u;
-    }
+    let first = select(0u, 1u, cone);
     for (var i = 0u; i < nb * nb + first; i++) {
         var offset = vec2<f32>(0.0);
         if (!cone) {
