@@ -42,11 +42,25 @@ impl Sampling {
     const NAMES: [&'static str; 2] = ["grid", "poisson"];
 }
 
+/// Where the blocker search's taps go: `Uniform`, Fernando's, over the
+/// search disk; `Scaled`, spread by scale (a tap at distance rho in the unit
+/// disk goes search^rho texels out, the receiver's own texel first: as many
+/// taps per octave of the search radius), so that blockers close to the
+/// receiver are found where the search radius is large (`visibility.wgsl`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Search {
+    Uniform,
+    Scaled,
+}
+
+impl Search {
+    const NAMES: [&'static str; 2] = ["scaled", "uniform"];
+}
+
 /// Which texels of the blocker search are blockers: `Plane`, the paper's,
 /// those nearer the light than the receiver's plane; `Cone`, of those, the
 /// ones inside the cone from the receiver to the light at their own depth
-/// (the only points that can hide part of the light from it), found by taps
-/// spread by scale (`visibility.wgsl`).
+/// (the only points that can hide part of the light from it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BlockerTest {
     Plane,
@@ -68,6 +82,7 @@ pub struct PcssParams {
     pub filter: Filter,
     pub sampling: Sampling,
     pub blocker_test: BlockerTest,
+    pub search: Search,
     /// The light above the receiver's tangent plane bounds its visibility,
     /// and is all it sees where the centre has set below that plane (the
     /// silhouette methods' `horizon` repair); off: the paper's centre test.
@@ -82,6 +97,8 @@ crate::gpu_type! {
         pub(crate) poisson: u32,
         /// 1: `BlockerTest::Cone`.
         pub(crate) cone: u32,
+        /// 1: `Search::Scaled`.
+        pub(crate) scaled: u32,
         /// 1: `PcssParams::horizon`.
         pub(crate) horizon: u32,
     }
@@ -112,7 +129,13 @@ impl Method for PercentageCloserSoftShadows {
                 "blocker_test",
                 "plane",
                 &BlockerTest::NAMES,
-                "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers; its taps spread by scale, as many per octave of the search radius)",
+                "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers)",
+            ),
+            ParamSpec::choice(
+                "search",
+                "scaled",
+                &Search::NAMES,
+                "where the blocker search's taps go: scaled (the receiver's texel, then as many taps per octave of the search radius, so that blockers near the receiver are found under a large search radius), uniform (the paper's: over the search disk)",
             ),
             ParamSpec::bool(
                 "horizon",
@@ -131,6 +154,7 @@ impl Method for PercentageCloserSoftShadows {
             filter: Filter::from_params(p),
             sampling: if p.choice("sampling") == "poisson" { Sampling::Poisson } else { Sampling::Grid },
             blocker_test: if p.choice("blocker_test") == "cone" { BlockerTest::Cone } else { BlockerTest::Plane },
+            search: if p.choice("search") == "uniform" { Search::Uniform } else { Search::Scaled },
             horizon: p.bool("horizon"),
         };
         if params.sampling == Sampling::Poisson {
@@ -194,6 +218,7 @@ impl Method for PercentageCloserSoftShadows {
                 seed: params.seed,
                 poisson: u32::from(params.sampling == Sampling::Poisson),
                 cone: u32::from(params.blocker_test == BlockerTest::Cone),
+                scaled: u32::from(params.search == Search::Scaled),
                 horizon: u32::from(params.horizon),
             };
             let sampling = ctx.parameters("pcss::sampling_uniforms", &sampling);
