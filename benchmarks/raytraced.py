@@ -1,6 +1,6 @@
 """Method `raytraced` measured: the numbers of docs/methods/raytraced.md
 (its time against Mitsuba's and reference's: `penumbra bench --config
-benchmarks/raytraced.toml`, then benchmarks/raytraced_ratio.py). Scenes:
+benchmarks/raytraced.toml`, its time_to_error.md). Scenes:
 every built-in scene and the real meshes (cube, spot, teapot, the small
 bunny, placed as from_mesh's default, and the Cornell box).
 

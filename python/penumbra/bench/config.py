@@ -5,18 +5,21 @@ from __future__ import annotations
 
 import os
 import tomllib
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from penumbra import scenes
+from penumbra import forms, scenes
 from penumbra.errors import ParameterError
 from penumbra.grid import expand as expand_grids
 from penumbra.grid import label
-from penumbra.scene import Scene
+from penumbra.scene import Mesh, Scene
 
 __all__ = ["BenchConfig", "SceneVariant", "load_config", "expand", "label"]
+
+#: A scene table's ``form``: the mesh as :mod:`penumbra.forms` hands it over (issue 27).
+MESH_FORMS: dict[str, Callable[[Mesh], Mesh | list[Mesh]]] = {"soup": forms.soup, "split": forms.split, "doubled": forms.doubled, "reversed": forms.reversed_windings, "slivers": forms.with_slivers}
 
 _KEYS = {
     "scenes": list,
@@ -31,6 +34,9 @@ _KEYS = {
     "large": dict,
     "radiance": bool,
     "table": list,
+    "sampling_noise": bool,
+    "resolution_error": int,
+    "time_to_error": dict,
 }
 
 
@@ -46,6 +52,8 @@ class SceneVariant:
     light_radius: float | None = None
     setup: str | None = None
     label: str = ""
+    #: The mesh file's mesh in another form (:data:`MESH_FORMS`: a triangle soup, split, ...).
+    form: str | None = None
 
     def build(self, width: int, height: int) -> Scene:
         """The scene at ``width`` x ``height``, named by its label."""
@@ -58,6 +66,8 @@ class SceneVariant:
                 raise ParameterError(f"scene {self.label!r} needs the shared meshes: set PENUMBRA_MESHES")
             radius = 0.5 if self.light_radius is None else self.light_radius
             scene = scenes.from_mesh(str(root / self.scene.partition(":")[2]), width=width, height=height, light_radius=radius, setup=self.setup)
+            if self.form is not None:  # from_mesh's scene: the ground slab, then the mesh
+                scene = forms.replace_mesh(scene, 1, MESH_FORMS[self.form](scene.meshes[1]))
         return replace(scene, name=self.label or self.scene)
 
 
@@ -90,6 +100,16 @@ class BenchConfig:
     #: Columns of ``results.csv`` written as ``table.md``: one line per scene
     #: and configuration (empty: no table).
     table: list[str] = field(default_factory=list)
+    #: Each row's own noise too (``sampling_noise_<metric>``, :func:`penumbra.metrics.own_noise`):
+    #: the configuration again with its ``seed`` + 1 (methods that take one; Mitsuba's peer rows at seed 3).
+    sampling_noise: bool = False
+    #: A factor k > 1: each row's resolution error too (``resolution_error_visibility_rmse`` and
+    #: ``_penumbra``): the RMSE against the same configuration at k times its ``map_size``.
+    resolution_error: int = 0
+    #: ``errors`` (list), optional ``aggregate`` (``mean`` or ``median``, the default) and ``split``
+    #: (parameters whose values are curves of their own): ``time_to_error.md``, each curve's time to
+    #: each error over the scenes and per scene, beside Mitsuba's (:func:`penumbra.bench.report.time_to_error_tables`).
+    time_to_error: dict[str, Any] = field(default_factory=dict)
     #: Every scene label of the run (both parts) -> what to build.
     variants: dict[str, SceneVariant] = field(default_factory=dict)
 
@@ -117,6 +137,8 @@ def _checked(values: dict[str, Any], where: str) -> dict[str, Any]:
     for key in ("size", "ground_truth_spp", "repeats"):
         if key in values and values[key] < 1:
             raise ParameterError(f"{where}: {key!r} must be at least 1, got {values[key]}")
+    if values.get("resolution_error", 0) not in range(2, 65) and values.get("resolution_error", 0) != 0:
+        raise ParameterError(f"{where}: 'resolution_error' is a factor of the map size of at least 2 (or 0: none), got {values['resolution_error']}")
     if "warmup" in values and values["warmup"] < 0:
         raise ParameterError(f"{where}: 'warmup' must be at least 0, got {values['warmup']}")
     return values
@@ -141,12 +163,17 @@ def load_config(path: str | os.PathLike[str], quick: bool = False) -> BenchConfi
     values["scenes"] = _scene_names(values.get("scenes", []), f"{path}", variants)
     if not all(isinstance(c, str) for c in values.get("table", [])):
         raise ParameterError(f"{path}: 'table' must be a list of results.csv column names")
+    tte = values.get("time_to_error")
+    if tte and (not isinstance(tte.get("errors"), list) or not tte["errors"] or set(tte) - {"errors", "aggregate", "split"}
+                or tte.get("aggregate", "median") not in ("mean", "median") or not isinstance(tte.get("split", []), list)):
+        raise ParameterError(f"{path}: [time_to_error] takes 'errors' (a list of penumbra RMSEs), optionally 'aggregate' (mean or median) and 'split' (parameter names); got {tte!r}")
     if values.get("large"):
         big = dict(values["large"])
         for key in ("scenes", "width", "height"):
             if key not in big:
-                raise ParameterError(f"{path}: [large] needs {key!r} (scenes, width, height; optionally ground_truth_spp, methods, peers)")
-        extra = set(big) - {"scenes", "width", "height", "ground_truth_spp", "methods", "peers"}
+                raise ParameterError(f"{path}: [large] needs {key!r} (scenes, width, height; optionally ground_truth_spp, methods, peers, sampling_noise, resolution_error)")
+        extra = set(big) - {"scenes", "width", "height", "ground_truth_spp", "methods", "peers", "sampling_noise", "resolution_error"}
+        _checked({k: v for k, v in big.items() if k in ("sampling_noise", "resolution_error")}, f"{path} [large]")
         if extra:
             raise ParameterError(f"{path}: [large]: unknown keys {sorted(extra)}")
         for key in ("width", "height", "ground_truth_spp"):
@@ -172,7 +199,7 @@ def _grids(methods_: Any, where: str) -> dict[str, list[dict[str, Any]]]:
     return out
 
 
-_VARIANT_KEYS = {"scene", "light_radius", "setup", "label"}
+_VARIANT_KEYS = {"scene", "light_radius", "setup", "label", "form"}
 
 
 def _variants(entry: dict[str, Any], where: str) -> list[SceneVariant]:
@@ -180,7 +207,7 @@ def _variants(entry: dict[str, Any], where: str) -> list[SceneVariant]:
     or a list) at every radius of ``light_radius`` (a number or a list)."""
     extra = set(entry) - _VARIANT_KEYS
     if extra or "scene" not in entry:
-        raise ParameterError(f"{where}: a scene table takes 'scene' and optionally 'light_radius', 'setup', 'label'; got {sorted(entry)}")
+        raise ParameterError(f"{where}: a scene table takes 'scene' and optionally 'light_radius', 'setup', 'label', 'form'; got {sorted(entry)}")
     names_ = entry["scene"] if isinstance(entry["scene"], list) else [entry["scene"]]
     radii = entry.get("light_radius")
     radii = radii if isinstance(radii, list) else [radii]
@@ -189,13 +216,16 @@ def _variants(entry: dict[str, Any], where: str) -> list[SceneVariant]:
     setup = entry.get("setup")
     if setup is not None and (setup not in scenes.SETUPS or not all(isinstance(n, str) and n.startswith("mesh:") for n in names_)):
         raise ParameterError(f"{where}: 'setup' (one of {list(scenes.SETUPS)}) places 'mesh:<file>' scenes only, got {entry!r}")
+    form = entry.get("form")
+    if form is not None and (form not in MESH_FORMS or setup is None):
+        raise ParameterError(f"{where}: 'form' (one of {list(MESH_FORMS)}) reshapes the mesh of a scene with a 'setup', got {entry!r}")
     if "label" in entry and len(names_) * len(radii) != 1:
         raise ParameterError(f"{where}: 'label' names one scene, not the {len(names_) * len(radii)} of {entry!r}")
     out = []
     for name in scenes.expand_names(names_):
         for r in radii:
-            default = name + (f" {setup}" if setup else "") + ("" if r is None else f" r={r:g}")
-            out.append(SceneVariant(name, None if r is None else float(r), setup, entry.get("label", default)))
+            default = name + (f" {setup}" if setup else "") + (f" {form}" if form else "") + ("" if r is None else f" r={r:g}")
+            out.append(SceneVariant(name, None if r is None else float(r), setup, entry.get("label", default), form))
     return out
 
 

@@ -22,13 +22,13 @@ import numpy as np
 from penumbra import metrics, scenes
 from penumbra import mitsuba as pm
 from penumbra.bench.config import BenchConfig, expand, label
-from penumbra.bench.report import ERROR, aggregate, markdown_table, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, what_to_use, write_csv
+from penumbra.bench.report import ERROR, aggregate, markdown_table, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, time_to_error_tables, what_to_use, write_csv
 from penumbra.errors import GpuFeatureError, ParameterError, SceneError
 from penumbra.grid import result_columns
 from penumbra.render import Renderer, RenderResult, methods
 from penumbra.scene import Scene
 
-__all__ = ["run", "run_scaling", "make_renderer", "machine_description", "parts", "Part", "with_mitsuba_ratios", "MITSUBA_RULE"]
+__all__ = ["run", "write_reports", "run_scaling", "make_renderer", "machine_description", "parts", "Part", "with_mitsuba_ratios", "MITSUBA_RULE"]
 
 
 #: What the rows are computed from: the metrics read visibility, radiance and object ids.
@@ -81,17 +81,20 @@ class Part:
     ground_truth_spp: int
     methods: dict[str, list[dict[str, Any]]]
     peers: dict[str, Any]
+    sampling_noise: bool = False
+    resolution_error: int = 0
 
 
 def parts(cfg: BenchConfig) -> list[Part]:
     """The run's parts: the main one at ``size`` and, with a ``[large]``
     table, its scenes at its ``width`` x ``height`` (its own ``methods``,
     ``peers`` and ``ground_truth_spp`` where given, else the main ones)."""
-    out = [Part("main", cfg.scenes, cfg.size, cfg.size, cfg.ground_truth_spp, cfg.methods, cfg.peers)]
+    out = [Part("main", cfg.scenes, cfg.size, cfg.size, cfg.ground_truth_spp, cfg.methods, cfg.peers, cfg.sampling_noise, cfg.resolution_error)]
     if cfg.large:
         big = cfg.large
         out.append(Part("large", list(big["scenes"]), int(big["width"]), int(big["height"]), int(big.get("ground_truth_spp", cfg.ground_truth_spp)),
-                        big.get("methods", cfg.methods), big.get("peers", cfg.peers)))
+                        big.get("methods", cfg.methods), big.get("peers", cfg.peers), big.get("sampling_noise", cfg.sampling_noise),
+                        big.get("resolution_error", cfg.resolution_error)))
     return out
 
 
@@ -128,6 +131,7 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
             **result_columns(result, timings=passes, total_ms=total),
         }
         row.update(metrics.compare(result, gt))
+        row.update(_own_errors(renderer, scene, method, params, result, gt, part))
         object_id = result.object_id
         rows.append(row)
         log(f"{scene_name[:30]:30s} {method:9s} {row['label']:40.40s} {row['total_ms']:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
@@ -147,9 +151,30 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
             "timing_source": "cpu_clock", "total_ms": vis_ms, "time_over_hard": vis_ms / hard_ms,
             "ms_visibility": vis_ms, "ms_radiance": rad_ms, **m,
         }
+        if part.sampling_noise:
+            again = pm.ground_truth(scene, spp=spp, seed=3, kinds=kinds, cache=False).images
+            both = (rad["radiance"], again["radiance"]) if cfg.radiance else None
+            noise = metrics.own_noise((images["visibility"], again["visibility"]), gt, radiance=both, object_id=object_id)
+            row.update({f"sampling_noise_{k}": v for k, v in noise.items()})
         rows.append(row)
         log(f"{scene_name[:30]:30s} mitsuba   {row['label']:40.40s} {vis_ms:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
     return with_mitsuba_ratios(rows)
+
+
+def _own_errors(renderer: Renderer, scene: Scene, method: str, params: dict[str, Any], result: RenderResult, gt: pm.GroundTruth, part: Part) -> dict[str, float]:
+    """A row's own noise (the same configuration at its seed + 1) and
+    resolution error (at ``resolution_error`` times its map size), where the
+    part asks for them and the method has a seed or a map size."""
+    out: dict[str, float] = {}
+    if part.sampling_noise and "seed" in result.params:
+        again = renderer.render(scene, method, outputs=OUTPUTS, **{**params, "seed": int(result.params["seed"]) + 1})
+        noise = metrics.own_noise((result.visibility, again.visibility), gt, radiance=(result.radiance, again.radiance), object_id=result.object_id)
+        out.update({f"sampling_noise_{k}": v for k, v in noise.items()})
+    if part.resolution_error and isinstance(result.params.get("map_size"), int):
+        finer = renderer.render(scene, method, outputs=OUTPUTS, **{**params, "map_size": part.resolution_error * int(result.params["map_size"])}).visibility
+        out["resolution_error_visibility_rmse"] = metrics.rmse(result.visibility, finer)
+        out["resolution_error_visibility_rmse_penumbra"] = metrics.rmse(result.visibility, finer, metrics.penumbra_region(gt.visibility))
+    return out
 
 
 #: How a row's time is set against Mitsuba's (the rule the report states).
@@ -179,11 +204,28 @@ def with_mitsuba_ratios(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return rows
 
 
+def with_form_ratios(cfg: BenchConfig, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Adds ``time_over_welded`` to the rows of a scene variant with a
+    ``form``: the row's time over the same configuration's on the same
+    variant with the mesh as given (welded), where the run has it."""
+    welded = {(r["scene"], r["size"], r["method"], r["label"]): float(r["total_ms"]) for r in rows}
+    for r in rows:
+        v = cfg.variants.get(r["scene"])
+        if v is None or v.form is None:
+            continue
+        same = [w.label for w in cfg.variants.values() if (w.scene, w.light_radius, w.setup, w.form) == (v.scene, v.light_radius, v.setup, None)]
+        base = welded.get((same[0], r["size"], r["method"], r["label"])) if same else None
+        if base:
+            r["time_over_welded"] = float(r["total_ms"]) / base
+    return rows
+
+
 def _key(cfg: BenchConfig, part: Part, scene_name: str, commit: str) -> str:
     """What a cached scene's rows depend on: the commit, the scene, its part's
     size, truth, grids and peers, and the timing settings."""
     variant = cfg.variants.get(scene_name)
     text = json.dumps([commit, scene_name, repr(variant) if variant else None, part.width, part.height, part.ground_truth_spp, part.methods, part.peers,
+                       part.sampling_noise, part.resolution_error,
                        cfg.repeats, cfg.warmup, cfg.max_seconds_per_config, cfg.radiance], sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
@@ -231,27 +273,40 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
                 f.write(json.dumps({"key": key, "rows": done[key]}, default=float) + "\n")
         rows += done[key]
     refused = [r for r in rows if r["kind"] == "refused"]
-    rows = [r for r in rows if r["kind"] != "refused"]
+    rows = with_form_ratios(cfg, [r for r in rows if r["kind"] != "refused"])
     if refused:
         (out / "refused.md").write_text("".join(f"- {r['scene']} {r['size']} {r['method']} {r['label']}: {r['refused']}\n" for r in refused))
     write_csv(out / "results.csv", rows)
-    main_rows = [r for r in rows if r["size"] == f"{cfg.size}x{cfg.size}"]
-    summary = aggregate(main_rows)
-    (out / "pareto.md").write_text(pareto_table(summary))
-    (out / "ratios.md").write_text(ratio_tables(main_rows, summary))
-    (out / "suite.md").write_text(suite_tables(rows) + "\n" + what_to_use(rows) + "\n" + MITSUBA_RULE[0].upper() + MITSUBA_RULE[1:] + ".\n")
-    if cfg.table:
-        (out / "table.md").write_text(markdown_table(rows, cfg.table))
-    plot_pareto(summary, out / "pareto.png", f"{cfg.name}: {cfg.size}x{cfg.size}, medians over {len(cfg.scenes)} scene(s)")
+    written = write_reports(cfg, out, rows)
     scaling_rows = run_scaling(cfg, renderer, log) if cfg.scaling else []
     if scaling_rows:
         write_csv(out / "scaling.csv", scaling_rows)
         plot_scaling(scaling_rows, out / "scaling.png")
     (out / "machine.md").write_text(machine_description(renderer, cfg, time.perf_counter() - start, commit))
     log((out / "suite.md").read_text())
-    log(f"wrote {out}/results.csv, suite.md, pareto.png, pareto.md, ratios.md, machine.md" + (", scaling.csv, scaling.png" if scaling_rows else "")
-        + (", table.md" if cfg.table else ""))
+    log(f"wrote {out}/results.csv, {', '.join(written)}, machine.md" + (", scaling.csv, scaling.png" if scaling_rows else ""))
     return rows
+
+
+def write_reports(cfg: BenchConfig, out: Path, rows: list[dict[str, Any]]) -> list[str]:
+    """Every report of ``rows`` (a run's, or its ``results.csv`` read back:
+    ``penumbra bench --report``) under ``out``; returns the files' names."""
+    main_rows = [r for r in rows if r["size"] == f"{cfg.size}x{cfg.size}"]
+    summary = aggregate(main_rows)
+    reports = {
+        "suite.md": suite_tables(rows) + "\n" + what_to_use(rows) + "\n" + MITSUBA_RULE[0].upper() + MITSUBA_RULE[1:] + ".\n",
+        "pareto.md": pareto_table(summary),
+        "ratios.md": ratio_tables(main_rows, summary),
+    }
+    if cfg.table:
+        reports["table.md"] = markdown_table(rows, cfg.table)
+    if cfg.time_to_error:
+        tte = cfg.time_to_error
+        reports["time_to_error.md"] = time_to_error_tables(main_rows, tte["errors"], tte.get("aggregate", "median"), tte.get("split", []))
+    for name, text in reports.items():
+        (out / name).write_text(text)
+    plot_pareto(summary, out / "pareto.png", f"{cfg.name}: {cfg.size}x{cfg.size}, medians over {len(cfg.scenes)} scene(s)")
+    return [*reports, "pareto.png"]
 
 
 def run_scaling(cfg: BenchConfig, renderer: Renderer, log: Callable[[str], None] = print) -> list[dict[str, Any]]:
