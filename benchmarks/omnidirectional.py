@@ -14,8 +14,9 @@ within two texels of a cube face boundary.
 The cost of cube faces, and every method against Mitsuba on the wide floor,
 the Cornell box and Sponza: `penumbra bench --config
 benchmarks/omnidirectional.toml`; `reference` at 1024 samples on the wide
-floor against the convergence criterion: `python
-benchmarks/reference_convergence.py --scenes wide_floor:spot.obj --spp 1024`.
+floor against the convergence criterion: `penumbra bench --config
+benchmarks/reference_convergence.toml --set 'scenes=["wide_floor:spot.obj"]'
+--set ground_truth_spp=1024 --set 'large={}'`.
 """
 
 from __future__ import annotations

@@ -64,6 +64,17 @@ def test_the_repository_config_loads_full_and_quick() -> None:
     assert set(full.methods) == set(penumbra.methods()) - {"reference", "adaptive"}, "every method but the peer (and adaptive, too slow for the full run) is benchmarked"
 
 
+def test_set_replaces_top_level_keys(tmp_path: Path) -> None:
+    path = tmp_path / "c.toml"
+    path.write_text("scenes = ['sphere_on_plane']\nsize = 64\n[large]\nscenes = ['sphere_on_plane']\nwidth = 8\nheight = 8\n")
+    cfg = bench.load_config(path, overrides=["scenes = ['cube_on_plane', 'resting_box']", "size=16", "large={}"])
+    assert cfg.scenes == ["cube_on_plane", "resting_box"] and cfg.size == 16 and not cfg.large
+    with pytest.raises(ParameterError, match="unknown key 'sizes'"):
+        bench.load_config(path, overrides=["sizes=3"])
+    with pytest.raises(ParameterError, match="--set takes key=<TOML value>"):
+        bench.load_config(path, overrides=["scenes=[cube"])
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [

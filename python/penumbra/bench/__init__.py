@@ -109,12 +109,13 @@ def build_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--quick", action="store_true", help="apply the config's [quick] table (the CI run: a few minutes)")
     parser.add_argument("--out", help="output folder (default benchmarks/results/<config name>)")
     parser.add_argument("--fresh", action="store_true", help="ignore the rows of scenes an interrupted run finished (out/rows.jsonl)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="replace a top-level key of the config with a TOML value (repeatable): --set 'scenes=[\"cornell_box\"]' --set 'large={}'")
     parser.add_argument("--report", action="store_true", help="render nothing: write the reports again from the run's out/results.csv (after a change to the config's report keys)")
     return parser
 
 
 def run_from_args(args: argparse.Namespace) -> int:
-    cfg = load_config(args.config, quick=args.quick)
+    cfg = load_config(args.config, quick=args.quick, overrides=args.set)
     out = Path(args.out or Path("benchmarks") / "results" / cfg.name)
     if args.report:
         if not (out / "results.csv").exists():

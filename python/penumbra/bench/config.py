@@ -144,8 +144,10 @@ def _checked(values: dict[str, Any], where: str) -> dict[str, Any]:
     return values
 
 
-def load_config(path: str | os.PathLike[str], quick: bool = False) -> BenchConfig:
-    """Reads a benchmark config; ``quick`` applies its ``[quick]`` table."""
+def load_config(path: str | os.PathLike[str], quick: bool = False, overrides: Iterable[str] = ()) -> BenchConfig:
+    """Reads a benchmark config; ``quick`` applies its ``[quick]`` table, then
+    each of ``overrides`` (``key=<TOML value>``: ``scenes=["cornell_box"]``,
+    ``large={}``) replaces a top-level key."""
     path = Path(path)
     try:
         with open(path, "rb") as f:
@@ -158,6 +160,12 @@ def load_config(path: str | os.PathLike[str], quick: bool = False) -> BenchConfi
     quick_values = values.pop("quick", {})
     if quick:
         values.update(_checked(dict(quick_values), f"{path} [quick]"))
+    for text in overrides:
+        key, _, value = text.partition("=")
+        try:
+            values.update(_checked(tomllib.loads(f"{key.strip()} = {value}"), f"{path} --set"))
+        except tomllib.TOMLDecodeError as e:
+            raise ParameterError(f"--set takes key=<TOML value> (scenes=[\"cornell_box\"], size=64), got {text!r}: {e}") from e
     values["methods"] = _grids(values.get("methods", {}), f"{path}")
     variants: dict[str, SceneVariant] = {}
     values["scenes"] = _scene_names(values.get("scenes", []), f"{path}", variants)
