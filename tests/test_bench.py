@@ -97,6 +97,7 @@ def test_set_replaces_top_level_keys(tmp_path: Path) -> None:
         ("scenes = [{ scene = 'no_such_scene' }]\n", "unknown scenes"),
         ("scenes = ['sphere_on_plane']\ntable = [1]\n", "'table' must be a list of results.csv column names"),
         ("scenes = [{ scene = 'cube_on_plane', form = 'soup' }]\n", "reshapes the mesh of a scene with a 'setup'"),
+        ("scenes = ['sphere_on_plane']\n[against.pcss]\nhard = { method = 'hard', keep = 'map_size' }\n", "[against.pcss] maps names to tables"),
         ("scenes = ['sphere_on_plane']\nresolution_error = 1\n", "'resolution_error' is a factor of the map size of at least 2"),
         ("scenes = ['sphere_on_plane']\nsampling_noise = 1\n", "'sampling_noise' must be true or false"),
         ("scenes = ['sphere_on_plane']\n[time_to_error]\nerrors = [0.1]\naggregate = 'max'\n", "[time_to_error] takes 'errors'"),
@@ -326,9 +327,21 @@ def test_rows_carry_their_own_noise_and_resolution_error(renderer: object, tmp_p
         pytest.skip("visibility ground truth needs Mitsuba's llvm variant")
     (tmp_path / "c.toml").write_text(
         "scenes = ['sphere_on_plane']\nsize = 24\nground_truth_spp = 16\nradiance = false\nwarmup = 0\nrepeats = 1\n"
-        "sampling_noise = true\nresolution_error = 2\n[methods]\npcss = [{ map_size = 256 }]\n[peers]\nmitsuba_spp = [4]\n"
+        "sampling_noise = true\nresolution_error = 2\n[methods]\npcss = [{ map_size = 256 }]\nhard = [{}, { map_size = 256 }]\n"
+        "[peers]\nmitsuba_spp = [4]\n[against.pcss]\nhard = { method = 'hard', keep = ['map_size'], threshold = 0.5 }\n"
+        "itself = {}\n[against.'*']\nfiner = { set = { map_size = 512 }, when = { map_size = 256 } }\nseed = { set = { seed = 1 } }\n"
     )
-    rows = {r["method"]: r for r in bench.run(bench.load_config(tmp_path / "c.toml"), tmp_path, log=lambda _: None)}
+    rows = {(r["method"], r["label"]): r for r in bench.run(bench.load_config(tmp_path / "c.toml"), tmp_path, log=lambda _: None)}
+    pcss = rows[("pcss", "map_size=256")]
+    # Against a row of the run (hard at the same map size): its image and its time.
+    assert 0 < pcss["vs_hard_mean"] <= pcss["vs_hard_max"] <= 1 and pcss["vs_hard_over"] >= 1
+    assert pcss["vs_hard_time"] == pytest.approx(pcss["total_ms"] / rows[("hard", "map_size=256")]["total_ms"])
+    # Against a configuration rendered for the purpose: no time; against itself: nothing.
+    assert 0 < pcss["vs_finer_rmse"] and "vs_finer_time" not in pcss and not any(k.startswith("vs_itself") for k in pcss)
+    # '*': every method, the rows 'when' names, the methods that take the parameters set.
+    assert "vs_finer_max" in rows[("hard", "map_size=256")] and "vs_finer_max" not in rows[("hard", "default")]
+    assert "vs_seed_max" in pcss and not any(k.startswith("vs_seed") for k in rows[("hard", "map_size=256")]), "hard takes no seed"
+    rows = {m: r for (m, lab), r in rows.items() if lab in ("default", "map_size=256", "spp=4")}
     assert "sampling_noise_visibility_rmse" not in rows["hard"], "hard has no seed"
     assert rows["hard"]["resolution_error_visibility_rmse"] >= 0 and "resolution_error_visibility_rmse" not in rows["mitsuba"]
     assert 0 < rows["pcss"]["sampling_noise_visibility_rmse_penumbra"] < 0.5 and 0 < rows["pcss"]["resolution_error_visibility_rmse_penumbra"] < 0.5

@@ -37,6 +37,7 @@ _KEYS = {
     "sampling_noise": bool,
     "resolution_error": int,
     "time_to_error": dict,
+    "against": dict,
 }
 
 
@@ -110,6 +111,14 @@ class BenchConfig:
     #: (parameters whose values are curves of their own): ``time_to_error.md``, each curve's time to
     #: each error over the scenes and per scene, beside Mitsuba's (:func:`penumbra.bench.report.time_to_error_tables`).
     time_to_error: dict[str, Any] = field(default_factory=dict)
+    #: method (or ``"*"``, every method) -> name -> ``{ method, keep, set, when, threshold }``: each row of
+    #: the method whose parameters include ``when``'s set against another configuration of the same scene,
+    #: ``method`` (default: the row's) with the row's parameters named in ``keep`` (default: all) and those
+    #: of ``set`` (rows of a method that does not take them are left alone): ``vs_<name>_max``, ``_mean``, ``_rmse`` (over geometry
+    #: pixels), ``_rmse_penumbra`` (the truth's), ``_over`` (geometry pixels off by more than ``threshold``,
+    #: a number or ``"one_sample"``: 1 / the row's ``n_samples``) and, where that configuration is a row of
+    #: the run, ``_time`` (the row's time over its).
+    against: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
     #: Every scene label of the run (both parts) -> what to build.
     variants: dict[str, SceneVariant] = field(default_factory=dict)
 
@@ -175,6 +184,11 @@ def load_config(path: str | os.PathLike[str], quick: bool = False, overrides: It
     if tte and (not isinstance(tte.get("errors"), list) or not tte["errors"] or set(tte) - {"errors", "aggregate", "split"}
                 or tte.get("aggregate", "median") not in ("mean", "median") or not isinstance(tte.get("split", []), list)):
         raise ParameterError(f"{path}: [time_to_error] takes 'errors' (a list of penumbra RMSEs), optionally 'aggregate' (mean or median) and 'split' (parameter names); got {tte!r}")
+    for method, entries in values.get("against", {}).items():
+        for name, entry in (entries.items() if isinstance(entries, dict) else [("", None)]):
+            if (not isinstance(entry, dict) or set(entry) - {"method", "keep", "set", "when", "threshold"} or not isinstance(entry.get("keep", []), list)
+                    or not isinstance(entry.get("set", {}), dict) or not isinstance(entry.get("when", {}), dict) or not (entry.get("threshold", 0.01) == "one_sample" or isinstance(entry.get("threshold", 0.01), (int, float)))):
+                raise ParameterError(f"{path}: [against.{method}] maps names to tables of 'method', 'keep' (a list), 'set' (a table), 'when' (a table), 'threshold' (a number or \"one_sample\"); got {name!r} = {entry!r}")
     if values.get("large"):
         big = dict(values["large"])
         for key in ("scenes", "width", "height"):

@@ -23,9 +23,9 @@ from penumbra import metrics, scenes
 from penumbra import mitsuba as pm
 from penumbra.bench.config import BenchConfig, expand, label
 from penumbra.bench.report import ERROR, aggregate, markdown_table, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, time_to_error_tables, what_to_use, write_csv
-from penumbra.errors import GpuFeatureError, ParameterError, SceneError
+from penumbra.errors import GpuFeatureError, ParameterError, PenumbraError, SceneError
 from penumbra.grid import result_columns
-from penumbra.render import Renderer, RenderResult, methods
+from penumbra.render import Renderer, RenderResult, method_info, methods
 from penumbra.scene import Scene
 
 __all__ = ["run", "write_reports", "run_scaling", "make_renderer", "machine_description", "parts", "Part", "with_mitsuba_ratios", "MITSUBA_RULE"]
@@ -112,6 +112,7 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
     hard_ms = math.nan
     object_id = None
     rows: list[dict[str, Any]] = []
+    done: dict[tuple[str, str], tuple[dict[str, Any], dict[str, Any], np.ndarray]] = {}  # (method, label) -> grid params, row, visibility
     for kind, method, params in configs:
         try:
             result, passes, repeats = _median_render(renderer, scene, method, params, cfg)
@@ -134,7 +135,11 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
         row.update(_own_errors(renderer, scene, method, params, result, gt, part))
         object_id = result.object_id
         rows.append(row)
+        done[(method, label(params))] = (params, row, result.visibility)
         log(f"{scene_name[:30]:30s} {method:9s} {row['label']:40.40s} {row['total_ms']:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
+    for params, row, visibility in list(done.values()):
+        for name, entry in {**cfg.against.get("*", {}), **cfg.against.get(row["method"], {})}.items():
+            row.update(_against(renderer, scene, row, params, visibility, name, entry, done, gt, object_id))
     spps = part.peers.get("mitsuba_spp", [])
     if spps:
         pm.ground_truth(scene, spp=min(spps), seed=2, kinds=kinds, cache=False)  # warm-up: Dr.Jit compiles its kernels
@@ -159,6 +164,34 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
         rows.append(row)
         log(f"{scene_name[:30]:30s} mitsuba   {row['label']:40.40s} {vis_ms:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
     return with_mitsuba_ratios(rows)
+
+
+def _against(renderer: Renderer, scene: Scene, row: dict[str, Any], params: dict[str, Any], visibility: np.ndarray, name: str, entry: dict[str, Any],
+             done: dict[tuple[str, str], tuple[dict[str, Any], dict[str, Any], np.ndarray]], gt: pm.GroundTruth, object_id: np.ndarray | None) -> dict[str, float]:
+    """The ``vs_<name>_*`` columns of one row (:attr:`BenchConfig.against`):
+    its visibility against the configuration ``entry`` names, that row's
+    image where the run has it, else rendered for the purpose."""
+    method = entry.get("method", row["method"])
+    keep = entry.get("keep")
+    other = {**{k: v for k, v in params.items() if keep is None or k in keep}, **entry.get("set", {})}
+    when = entry.get("when", {})
+    if (method, other) == (row["method"], params) or any(params.get(k) != v for k, v in when.items()) or not set(other) <= set(method_info(method).defaults()):
+        return {}  # itself; a row the entry is not for; a parameter the method does not take (a seed for hard)
+    found = done.get((method, label(other)))
+    try:
+        theirs = found[2] if found else renderer.render(scene, method, outputs=OUTPUTS, **other).visibility
+    except PenumbraError:  # a configuration the scene or the adapter refuses (maps past its limits)
+        return {}
+    threshold = entry.get("threshold", 0.01)
+    if threshold == "one_sample":  # one sample's weight, and float rounding
+        threshold = 1.0 / float(json.loads(row["params"])["n_samples"]) + 1e-6
+    geometry = object_id >= 0 if object_id is not None else np.ones(visibility.shape, dtype=bool)
+    d = np.abs(visibility.astype(np.float64) - theirs)
+    out = {"max": float(d[geometry].max()), "mean": float(d[geometry].mean()), "rmse": metrics.rmse(visibility, theirs, geometry),
+           "rmse_penumbra": metrics.rmse(visibility, theirs, metrics.penumbra_region(gt.visibility)), "over": float((d[geometry] > threshold).sum())}
+    if found:
+        out["time"] = float(row["total_ms"]) / float(found[1]["total_ms"])
+    return {f"vs_{name}_{k}": v for k, v in out.items()}
 
 
 def _own_errors(renderer: Renderer, scene: Scene, method: str, params: dict[str, Any], result: RenderResult, gt: pm.GroundTruth, part: Part) -> dict[str, float]:
@@ -225,7 +258,7 @@ def _key(cfg: BenchConfig, part: Part, scene_name: str, commit: str) -> str:
     size, truth, grids and peers, and the timing settings."""
     variant = cfg.variants.get(scene_name)
     text = json.dumps([commit, scene_name, repr(variant) if variant else None, part.width, part.height, part.ground_truth_spp, part.methods, part.peers,
-                       part.sampling_noise, part.resolution_error,
+                       part.sampling_noise, part.resolution_error, cfg.against,
                        cfg.repeats, cfg.warmup, cfg.max_seconds_per_config, cfg.radiance], sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
