@@ -169,8 +169,8 @@ def test_adaptive_mode_refines_only_the_penumbra_and_matches_plain_mode(rt: penu
         kept = d > 0
         assert np.isin(adaptive.visibility[kept], [0.0, 1.0]).all(), name
         assert (d == 0).sum() >= adaptive.stats["full_pixels"], name
-        # Misses (measured by `benchmarks/raytraced.py adaptive` at 128x128 with
-        # 256 samples: ... of the penumbra's pixels at the defaults).
+        # Misses (measured by `penumbra bench --config benchmarks/raytraced_adaptive.toml` at 128x128 with
+        # 256 samples: 2 of the 10103 penumbra pixels of nine scenes at the defaults).
         region = metrics.penumbra_region(plain.visibility)
         assert (d > 0.01).sum() <= max(2, 0.01 * region.sum()), (name, (d > 0.01).sum(), region.sum())
 
@@ -202,8 +202,8 @@ def test_unbiased_against_mitsuba_and_error_falls_with_samples(rt: penumbra.Rend
             if n == 1024:
                 error = metrics.rmse(a, gt.visibility, region)
                 combined = math.hypot(gt_noise, own[n])
-                # No bias: the error is the two estimators' noise (ratios 0.8-1.0
-                # at 96x96 in `benchmarks/raytraced.py accuracy`).
+                # No bias: the error is the two estimators' noise (ratios 0.93-1.31
+                # at 96x96 in `penumbra bench --config benchmarks/raytraced_accuracy.toml`).
                 assert error < 1.5 * combined, (name, error, gt_noise, own[n])
         # 1/sqrt(n) would divide the noise by 4 from 16 to 256 samples; stratification does better.
         assert own[16] / own[256] > 3.0, (name, own)
