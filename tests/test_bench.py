@@ -98,6 +98,8 @@ def test_set_replaces_top_level_keys(tmp_path: Path) -> None:
         ("scenes = ['sphere_on_plane']\ntable = [1]\n", "'table' must be a list of results.csv column names"),
         ("scenes = [{ scene = 'cube_on_plane', form = 'soup' }]\n", "reshapes the mesh of a scene with a 'setup'"),
         ("scenes = ['sphere_on_plane']\n[against.pcss]\nhard = { method = 'hard', keep = 'map_size' }\n", "[against.pcss] maps names to tables"),
+        ("scenes = [{ scene = 'resting_box', camera = { eye = [0, 9, 0] } }]\n", "a scene's 'camera' takes 'eye', 'target'"),
+        ("scenes = ['sphere_on_plane']\ncolumns = ['no_function']\n", "'columns' must be a list of \"module:function\" names"),
         ("scenes = ['sphere_on_plane']\nresolution_error = 1\n", "'resolution_error' is a factor of the map size of at least 2"),
         ("scenes = ['sphere_on_plane']\nsampling_noise = 1\n", "'sampling_noise' must be true or false"),
         ("scenes = ['sphere_on_plane']\n[time_to_error]\nerrors = [0.1]\naggregate = 'max'\n", "[time_to_error] takes 'errors'"),
@@ -306,19 +308,22 @@ def test_report_rewrites_the_tables_from_results_csv_without_rendering(tmp_path:
             ["--config", str(tmp_path / "c.toml"), "--out", str(tmp_path / "none"), "--report"]))
 
 
-def test_a_form_variant_is_the_mesh_in_that_form_and_its_time_is_set_over_the_welded_ones() -> None:
+def test_a_form_or_a_camera_variant_is_the_scene_in_that_form_or_from_there(tmp_path: Path) -> None:
     import penumbra
 
     if penumbra.scenes.meshes_folder() is None:
         pytest.skip("needs the shared meshes")
-    from penumbra.bench.runner import with_form_ratios
-
     welded, soup = bench.SceneVariant("mesh:cube.obj", 0.45, "default", "cube"), bench.SceneVariant("mesh:cube.obj", 0.45, "default", "cube soup", "soup")
     built = soup.build(8, 8)
     assert len(built.meshes[1].vertices) == 3 * len(built.meshes[1].faces) == 3 * len(welded.build(8, 8).meshes[1].faces), "every face its own corners"
-    cfg = bench.BenchConfig(name="f", scenes=["cube", "cube soup"], variants={"cube": welded, "cube soup": soup})
-    rows = with_form_ratios(cfg, _rows({"cube": [("hard", {}, 2.0, 0.3)], "cube soup": [("hard", {}, 3.0, 0.3)]}))
-    assert "time_over_welded" not in rows[0] and rows[1]["time_over_welded"] == pytest.approx(1.5)
+    (tmp_path / "c.toml").write_text("scenes = [{ scene = 'resting_box', label = 'above', camera = { eye = [0, 9, 0], target = [0, 0, 0], up = [0, 0, -1] } }]\n")
+    above = bench.load_config(tmp_path / "c.toml").scene("above", 16, 8)
+    assert above.camera.eye == (0.0, 9.0, 0.0) and above.camera.width == 16 and above.name == "above"
+
+
+def _pixel_columns(result: object, scene: object) -> dict[str, float]:
+    """A config's own column (``columns``): it gets every image."""
+    return {"position_pixels": float(result.position.shape[0] * result.position.shape[1]), "same_scene": float(scene.camera.width == 24)}  # type: ignore[attr-defined]
 
 
 @pytest.mark.gpu
@@ -327,7 +332,7 @@ def test_rows_carry_their_own_noise_and_resolution_error(renderer: object, tmp_p
         pytest.skip("visibility ground truth needs Mitsuba's llvm variant")
     (tmp_path / "c.toml").write_text(
         "scenes = ['sphere_on_plane']\nsize = 24\nground_truth_spp = 16\nradiance = false\nwarmup = 0\nrepeats = 1\n"
-        "sampling_noise = true\nresolution_error = 2\n[methods]\npcss = [{ map_size = 256 }]\nhard = [{}, { map_size = 256 }]\n"
+        "sampling_noise = true\nresolution_error = 2\ncolumns = ['test_bench:_pixel_columns']\n[methods]\npcss = [{ map_size = 256 }]\nhard = [{}, { map_size = 256 }]\n"
         "[peers]\nmitsuba_spp = [4]\n[against.pcss]\nhard = { method = 'hard', keep = ['map_size'], threshold = 0.5 }\n"
         "itself = {}\n[against.'*']\nfiner = { set = { map_size = 512 }, when = { map_size = 256 } }\nseed = { set = { seed = 1 } }\n"
     )
@@ -340,6 +345,7 @@ def test_rows_carry_their_own_noise_and_resolution_error(renderer: object, tmp_p
     assert 0 < pcss["vs_finer_rmse"] and "vs_finer_time" not in pcss and not any(k.startswith("vs_itself") for k in pcss)
     # '*': every method, the rows 'when' names, the methods that take the parameters set.
     assert "vs_finer_max" in rows[("hard", "map_size=256")] and "vs_finer_max" not in rows[("hard", "default")]
+    assert pcss["position_pixels"] == 24 * 24 and pcss["same_scene"] == 1.0, "the columns' function saw positions and the scene"
     assert "vs_seed_max" in pcss and not any(k.startswith("vs_seed") for k in rows[("hard", "map_size=256")]), "hard takes no seed"
     rows = {m: r for (m, lab), r in rows.items() if lab in ("default", "map_size=256", "spp=4")}
     assert "sampling_noise_visibility_rmse" not in rows["hard"], "hard has no seed"

@@ -34,7 +34,7 @@ run's ``results.csv``. ``sampling_noise = true`` adds each row's own noise
 (the configuration again at its seed + 1; Mitsuba's rows at another seed),
 ``resolution_error = k`` its RMSE against the same configuration at k times
 its map size; a ``form`` in a scene table (``"soup"``, ...) hands the mesh
-over in that form and adds ``time_over_welded``.
+over in that form, a ``camera`` sets another view.
 
 An entry of ``scenes`` is a scene name or a table of variants: ``{ scene =
 "cube_on_plane", light_radius = [0.1, 0.4] }`` (a light-radius sweep),

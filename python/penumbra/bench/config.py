@@ -14,7 +14,7 @@ from penumbra import forms, scenes
 from penumbra.errors import ParameterError
 from penumbra.grid import expand as expand_grids
 from penumbra.grid import label
-from penumbra.scene import Mesh, Scene
+from penumbra.scene import Camera, Mesh, Scene
 
 __all__ = ["BenchConfig", "SceneVariant", "load_config", "expand", "label"]
 
@@ -38,6 +38,7 @@ _KEYS = {
     "resolution_error": int,
     "time_to_error": dict,
     "against": dict,
+    "columns": list,
 }
 
 
@@ -55,6 +56,8 @@ class SceneVariant:
     label: str = ""
     #: The mesh file's mesh in another form (:data:`MESH_FORMS`: a triangle soup, split, ...).
     form: str | None = None
+    #: Another camera: ``eye``, ``target`` and optionally ``up``, ``fov_y`` (:class:`penumbra.Camera`).
+    camera: tuple[tuple[str, Any], ...] = ()
 
     def build(self, width: int, height: int) -> Scene:
         """The scene at ``width`` x ``height``, named by its label."""
@@ -69,6 +72,8 @@ class SceneVariant:
             scene = scenes.from_mesh(str(root / self.scene.partition(":")[2]), width=width, height=height, light_radius=radius, setup=self.setup)
             if self.form is not None:  # from_mesh's scene: the ground slab, then the mesh
                 scene = forms.replace_mesh(scene, 1, MESH_FORMS[self.form](scene.meshes[1]))
+        if self.camera:
+            scene = scene.with_camera(Camera(**dict(self.camera), width=width, height=height))
         return replace(scene, name=self.label or self.scene)
 
 
@@ -119,6 +124,10 @@ class BenchConfig:
     #: a number or ``"one_sample"``: 1 / the row's ``n_samples``) and, where that configuration is a row of
     #: the run, ``_time`` (the row's time over its).
     against: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
+    #: ``"module:function"`` names: each called with a row's render result and scene, its dict of numbers
+    #: added to the row (the renders then read back every image: ``position``, ``normal``); a study's
+    #: own measure, such as :func:`penumbra.transition.contact_widths`.
+    columns: list[str] = field(default_factory=list)
     #: Every scene label of the run (both parts) -> what to build.
     variants: dict[str, SceneVariant] = field(default_factory=dict)
 
@@ -178,6 +187,8 @@ def load_config(path: str | os.PathLike[str], quick: bool = False, overrides: It
     values["methods"] = _grids(values.get("methods", {}), f"{path}")
     variants: dict[str, SceneVariant] = {}
     values["scenes"] = _scene_names(values.get("scenes", []), f"{path}", variants)
+    if not all(isinstance(c, str) and ":" in c for c in values.get("columns", [])):
+        raise ParameterError(f"{path}: 'columns' must be a list of \"module:function\" names")
     if not all(isinstance(c, str) for c in values.get("table", [])):
         raise ParameterError(f"{path}: 'table' must be a list of results.csv column names")
     tte = values.get("time_to_error")
@@ -221,7 +232,7 @@ def _grids(methods_: Any, where: str) -> dict[str, list[dict[str, Any]]]:
     return out
 
 
-_VARIANT_KEYS = {"scene", "light_radius", "setup", "label", "form"}
+_VARIANT_KEYS = {"scene", "light_radius", "setup", "label", "form", "camera"}
 
 
 def _variants(entry: dict[str, Any], where: str) -> list[SceneVariant]:
@@ -229,7 +240,7 @@ def _variants(entry: dict[str, Any], where: str) -> list[SceneVariant]:
     or a list) at every radius of ``light_radius`` (a number or a list)."""
     extra = set(entry) - _VARIANT_KEYS
     if extra or "scene" not in entry:
-        raise ParameterError(f"{where}: a scene table takes 'scene' and optionally 'light_radius', 'setup', 'label', 'form'; got {sorted(entry)}")
+        raise ParameterError(f"{where}: a scene table takes 'scene' and optionally 'light_radius', 'setup', 'label', 'form', 'camera'; got {sorted(entry)}")
     names_ = entry["scene"] if isinstance(entry["scene"], list) else [entry["scene"]]
     radii = entry.get("light_radius")
     radii = radii if isinstance(radii, list) else [radii]
@@ -241,13 +252,16 @@ def _variants(entry: dict[str, Any], where: str) -> list[SceneVariant]:
     form = entry.get("form")
     if form is not None and (form not in MESH_FORMS or setup is None):
         raise ParameterError(f"{where}: 'form' (one of {list(MESH_FORMS)}) reshapes the mesh of a scene with a 'setup', got {entry!r}")
+    camera = entry.get("camera", {})
+    if camera and (not isinstance(camera, dict) or not {"eye", "target"} <= set(camera) or set(camera) - {"eye", "target", "up", "fov_y"}):
+        raise ParameterError(f"{where}: a scene's 'camera' takes 'eye', 'target' and optionally 'up', 'fov_y'; got {camera!r}")
     if "label" in entry and len(names_) * len(radii) != 1:
         raise ParameterError(f"{where}: 'label' names one scene, not the {len(names_) * len(radii)} of {entry!r}")
     out = []
     for name in scenes.expand_names(names_):
         for r in radii:
             default = name + (f" {setup}" if setup else "") + (f" {form}" if form else "") + ("" if r is None else f" r={r:g}")
-            out.append(SceneVariant(name, None if r is None else float(r), setup, entry.get("label", default), form))
+            out.append(SceneVariant(name, None if r is None else float(r), setup, entry.get("label", default), form, tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in sorted(camera.items()))))
     return out
 
 

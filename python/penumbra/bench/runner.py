@@ -5,6 +5,7 @@ truth, the peers (Mitsuba's estimator, ``reference``) and the scaling runs."""
 from __future__ import annotations
 
 import hashlib
+import importlib
 import json
 import math
 import os
@@ -36,11 +37,12 @@ OUTPUTS = ["radiance", "visibility", "object_id"]
 
 
 def _median_render(renderer: Renderer, scene: Scene, method: str, params: dict[str, Any], cfg: BenchConfig) -> tuple[RenderResult, dict[str, float], int]:
+    outputs = OUTPUTS + ["position", "normal"] if cfg.columns else OUTPUTS  # a config's own columns may read them
     for _ in range(cfg.warmup):
-        renderer.render(scene, method, outputs=OUTPUTS, **params)
+        renderer.render(scene, method, outputs=outputs, **params)
     results = []
     for _ in range(cfg.repeats):
-        results.append(renderer.render(scene, method, outputs=OUTPUTS, **params))
+        results.append(renderer.render(scene, method, outputs=outputs, **params))
         if results[-1].total_ms > cfg.max_seconds_per_config * 1000:
             break
     passes = {name: statistics.median(r.timings.get(name, 0.0) for r in results) for name in results[-1].timings}
@@ -133,6 +135,9 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
         }
         row.update(metrics.compare(result, gt))
         row.update(_own_errors(renderer, scene, method, params, result, gt, part))
+        for name in cfg.columns:
+            module, _, function = name.partition(":")
+            row.update(getattr(importlib.import_module(module), function)(result, scene))
         object_id = result.object_id
         rows.append(row)
         done[(method, label(params))] = (params, row, result.visibility)
@@ -237,28 +242,12 @@ def with_mitsuba_ratios(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return rows
 
 
-def with_form_ratios(cfg: BenchConfig, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Adds ``time_over_welded`` to the rows of a scene variant with a
-    ``form``: the row's time over the same configuration's on the same
-    variant with the mesh as given (welded), where the run has it."""
-    welded = {(r["scene"], r["size"], r["method"], r["label"]): float(r["total_ms"]) for r in rows}
-    for r in rows:
-        v = cfg.variants.get(r["scene"])
-        if v is None or v.form is None:
-            continue
-        same = [w.label for w in cfg.variants.values() if (w.scene, w.light_radius, w.setup, w.form) == (v.scene, v.light_radius, v.setup, None)]
-        base = welded.get((same[0], r["size"], r["method"], r["label"])) if same else None
-        if base:
-            r["time_over_welded"] = float(r["total_ms"]) / base
-    return rows
-
-
 def _key(cfg: BenchConfig, part: Part, scene_name: str, commit: str) -> str:
     """What a cached scene's rows depend on: the commit, the scene, its part's
     size, truth, grids and peers, and the timing settings."""
     variant = cfg.variants.get(scene_name)
     text = json.dumps([commit, scene_name, repr(variant) if variant else None, part.width, part.height, part.ground_truth_spp, part.methods, part.peers,
-                       part.sampling_noise, part.resolution_error, cfg.against,
+                       part.sampling_noise, part.resolution_error, cfg.against, cfg.columns,
                        cfg.repeats, cfg.warmup, cfg.max_seconds_per_config, cfg.radiance], sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
@@ -306,7 +295,7 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
                 f.write(json.dumps({"key": key, "rows": done[key]}, default=float) + "\n")
         rows += done[key]
     refused = [r for r in rows if r["kind"] == "refused"]
-    rows = with_form_ratios(cfg, [r for r in rows if r["kind"] != "refused"])
+    rows = [r for r in rows if r["kind"] != "refused"]
     if refused:
         (out / "refused.md").write_text("".join(f"- {r['scene']} {r['size']} {r['method']} {r['label']}: {r['refused']}\n" for r in refused))
     write_csv(out / "results.csv", rows)
