@@ -94,7 +94,7 @@ def test_point_light_is_one_ray_and_equals_cpu_ray_casting(rt: penumbra.Renderer
     exact[geometry] = point_light_visibility(scene, same.position[geometry], same.normal[geometry])
     np.testing.assert_array_equal(same.visibility, exact)
     assert 0 < exact[geometry].mean() < 1, "the scene has shadows to get wrong"
-    # With the default offset: no acne and no leak beyond the outline (`benchmarks/point_light.py offsets`).
+    # With the default offset: no acne and no leak beyond the outline (`penumbra bench --config benchmarks/ray_offsets.toml`).
     default = rt.render(scene, "raytraced")
     wrong = geometry & ((default.visibility > 0.5) != (exact > 0.5)) & ~outline_band(exact > 0.5)
     assert not wrong.any(), f"{wrong.sum()} pixels disagree beyond the outline"
