@@ -1,14 +1,13 @@
 """Straight edges against their exact coverage: the analytic checks of
 docs/methods/wedges.md and docs/methods/backprojection.md (their tables
-against Mitsuba: benchmarks/wedges.toml, benchmarks/backprojection.toml).
+against Mitsuba: benchmarks/wedges.toml, benchmarks/backprojection.toml; the
+acute caster: benchmarks/acute_wedges.toml).
 
-    python benchmarks/exact_edges.py [--spp 256] [--parts wedges acute backprojection]
+    python benchmarks/exact_edges.py [--parts wedges backprojection]
 
 - wedges: one long box edge over a plane, wedges' Eq. 1-3 interpolation
   against the exact fraction of the disk the plane through the edge and the
   pixel cuts (pvm's disk cut, Cournia Eq. 4.1), over the edge's penumbra;
-- acute: `acute_wedges` on a thin triangular caster (a 23-degree tip; the
-  paper's Figure 7), penumbra RMSE against Mitsuba;
 - backprojection: tests/test_backprojection.py's single edge moved across a
   level-2 texel in 8 steps, against the exact disk coverage.
 """
@@ -20,11 +19,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
 import penumbra
-from penumbra import metrics
-from penumbra import mitsuba as pm
 from penumbra.grid import label
 from penumbra.scenes import box, ground_slab
 
@@ -56,28 +52,6 @@ def long_edge(renderer: penumbra.Renderer) -> None:
     print(f"\n(linear against the disk segment's S-curve in the chord's offset alone: {np.abs((1 - u) / 2 - (np.arccos(u) - u * np.sqrt(1 - u * u)) / np.pi).max():.4f} at most)")
 
 
-def prism(points: list[tuple[float, float]], y0: float, y1: float) -> penumbra.Mesh:
-    """A closed prism over the polygon ``points`` (x, z) between heights y0 and y1."""
-    pts, n = np.asarray(points, float), len(points)
-    v = np.vstack([np.c_[pts[:, 0], np.full(n, y), pts[:, 1]] for y in (y0, y1)])
-    faces = [[0, i + 1, i] for i in range(1, n - 1)] + [[n, n + i, n + i + 1] for i in range(1, n - 1)]
-    faces += [f for i in range(n) for f in ([i, (i + 1) % n, n + (i + 1) % n], [i, n + (i + 1) % n, n + i])]
-    f = np.array(faces)
-    return penumbra.Mesh(v, f if trimesh.Trimesh(v, f, process=False).volume > 0 else f[:, ::-1], object_id=1, name="prism")
-
-
-def acute(renderer: penumbra.Renderer, spp: int) -> None:
-    print("\n| radius | hard | pvm | wedges acute_wedges=0 | 3 | 6 | 12 | 6, falloff | extra wedges at 6 |\n|---|---|---|---|---|---|---|---|---|")
-    caster = prism([(-1.5, -0.6), (1.5, 0.0), (-1.5, 0.6)], 1.9, 2.0)
-    configs = [("hard", {}), ("pvm", {})] + [("wedges", {"acute_wedges": n}) for n in (0, 3, 6, 12)] + [("wedges", {"acute_wedges": 6, "falloff": True})]
-    for radius in (0.3, 0.6):
-        camera = penumbra.Camera.look_at((0.0, 6.0, 3.0), (0.3, 0.0, 0.0), fov_y=45, width=128, height=128)
-        scene = penumbra.Scene([ground_slab(half_size=4.0), caster], penumbra.SphereLight((0.0, 5.0, 0.0), radius, intensity=40.0), camera)
-        gt = pm.ground_truth(scene, spp=spp, kinds=("visibility",)).visibility
-        cells = [f"{metrics.rmse(renderer.render(scene, m, **p).visibility, gt, metrics.penumbra_region(gt)):.4f}" for m, p in configs]
-        print(f"| {radius} | " + " | ".join(cells) + f" | {renderer.render(scene, 'wedges', acute_wedges=6).stats['extra_wedges']} |")
-
-
 def backprojection_edge(renderer: penumbra.Renderer) -> None:
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
     from test_backprojection import edge_scene, exact_edge_visibility
@@ -98,12 +72,11 @@ def backprojection_edge(renderer: penumbra.Renderer) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--spp", type=int, default=256, help="Mitsuba's samples for the acute caster (default 256)")
-    parser.add_argument("--parts", nargs="+", default=["wedges", "acute", "backprojection"], choices=["wedges", "acute", "backprojection"])
+    parser.add_argument("--parts", nargs="+", default=["wedges", "backprojection"], choices=["wedges", "backprojection"])
     args = parser.parse_args()
     renderer = penumbra.Renderer()
     for part in args.parts:
-        {"wedges": long_edge, "acute": lambda r: acute(r, args.spp), "backprojection": backprojection_edge}[part](renderer)
+        {"wedges": long_edge, "backprojection": backprojection_edge}[part](renderer)
 
 
 if __name__ == "__main__":

@@ -1,16 +1,14 @@
-"""Shadow tests with a point light against exact ray casting on the CPU
-(`penumbra.raycast.point_light_visibility`): acne (shadowed by the method,
-lit in truth) and leaks (the reverse), beyond and on the one-pixel band
-around the true shadow outline (resolution, not bias), per setting.
+"""`hard`'s bias schemes with a point light against exact ray casting on
+the CPU (`penumbra.raycast.point_light_errors`): acne (shadowed by the
+method, lit in truth) and leaks (the reverse), beyond and on the one-pixel
+band around the true shadow outline (resolution, not bias), per setting
+(docs/methods/hard.md): every built-in scene and two thin closed plates
+(2 x t x 2 boxes at y = 0.5, t = 1e-4 and 1e-3: issue 22's case for
+`second_depth`), each bias scheme at map sizes 512 and 2048. The ray
+caster's truth is computed once per scene. (`raytraced`'s ray offsets, the
+same comparison: `penumbra bench --config benchmarks/ray_offsets.toml`.)
 
-    python benchmarks/point_light.py bias [--size 256]        # hard's bias schemes (docs/methods/hard.md)
-    python benchmarks/point_light.py offsets [--size 128]     # raytraced's ray offsets (docs/methods/raytraced.md)
-
-`bias`: every built-in scene and two thin closed plates (2 x t x 2 boxes at
-y = 0.5, t = 1e-4 and 1e-3: issue 22's case for `second_depth`), each bias
-scheme at map sizes 512 and 2048. `offsets`: every built-in scene and the
-real meshes (cube, spot, teapot, the small bunny, the Cornell box), several
-ray-origin offsets.
+    python benchmarks/point_light.py [--size 256]
 """
 
 from __future__ import annotations
@@ -21,7 +19,7 @@ from typing import Any
 import numpy as np
 
 import penumbra
-from penumbra.raycast import outline_band, point_light_visibility
+from penumbra.raycast import point_light_errors, point_light_visibility
 
 
 def thin_plate(thickness: float, size: int) -> penumbra.Scene:
@@ -38,34 +36,23 @@ def disagreement(renderer: penumbra.Renderer, scenes: dict[str, penumbra.Scene],
         for params in settings:
             result = renderer.render(scene, method, **params)
             geometry = result.object_id >= 0
-            if exact is None:
+            if exact is None:  # once per scene: every setting has the same G-buffer
                 exact = np.zeros(geometry.shape, dtype=bool)
                 exact[geometry] = point_light_visibility(scene, result.position[geometry], result.normal[geometry]) > 0.5
-            lit, band = result.visibility > 0.5, outline_band(exact)
-            acne, leak = geometry & exact & ~lit, geometry & ~exact & lit
+            e = point_light_errors(result, scene, exact)
             shown = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items())
-            print(f"| {name} | {shown} | {(acne & ~band).sum()} | {(leak & ~band).sum()} | {(acne & band).sum()} | {(leak & band).sum()} | {geometry.sum()} |", flush=True)
+            print(f"| {name} | {shown} | " + " | ".join(f"{e[k]:.0f}" for k in ("acne", "leak", "acne_on_outline", "leak_on_outline", "geometry_pixels")) + " |", flush=True)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("what", choices=["bias", "offsets"])
-    parser.add_argument("--size", type=int, help="image side (default 256 for bias, 128 for offsets)")
+    parser.add_argument("--size", type=int, default=256)
     args = parser.parse_args()
-    size = args.size or (256 if args.what == "bias" else 128)
     renderer = penumbra.Renderer()
-    print(f"adapter: {renderer.adapter_info['name']} ({renderer.adapter_info['driver_info']}); {size}x{size}; light radius 0\n")
-    scenes = {n: penumbra.scenes.get(n, width=size, height=size, light_radius=0.0) for n in penumbra.scenes.names()}
-    if args.what == "bias":
-        scenes.update({f"thin_plate t={t:g}": thin_plate(t, size) for t in (1e-4, 1e-3)})
-        disagreement(renderer, scenes, "hard", [{"map_size": m, "bias": b} for m in (512, 2048) for b in ("slope", "second_depth", "midpoint", "none")])
-        return
-    root = penumbra.scenes.meshes_folder()
-    if root is not None:  # the meshes placed as from_mesh's default, and the Cornell box
-        scenes.update({m: penumbra.scenes.from_mesh(str(root / m), width=size, height=size, light_radius=0.0)
-                       for m in ("cube.obj", "spot.obj", "teapot-mcguire-closed.obj", "bun_zipper_res4.ply")})
-        scenes["CornellBox-Original.obj"] = penumbra.scenes.get("cornell_box", width=size, height=size, light_radius=0.0)
-    disagreement(renderer, scenes, "raytraced", [{"ray_offset": o} for o in (0.0, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3)])
+    print(f"adapter: {renderer.adapter_info['name']} ({renderer.adapter_info['driver_info']}); {args.size}x{args.size}; light radius 0\n")
+    scenes = {n: penumbra.scenes.get(n, width=args.size, height=args.size, light_radius=0.0) for n in penumbra.scenes.names()}
+    scenes.update({f"thin_plate t={t:g}": thin_plate(t, args.size) for t in (1e-4, 1e-3)})
+    disagreement(renderer, scenes, "hard", [{"map_size": m, "bias": b} for m in (512, 2048) for b in ("slope", "second_depth", "midpoint", "none")])
 
 
 if __name__ == "__main__":

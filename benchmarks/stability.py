@@ -45,29 +45,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import penumbra  # noqa: E402
 from stress_scenes import FAST, METHODS, check_images  # noqa: E402
-from test_properties import FIXED_SPECS, SCALE_FREE, SOFT_METHODS, SceneSpec, translated_default_scene, visibility_difference  # noqa: E402
+from test_properties import FIXED_SPECS, SCALE_FREE, SOFT_METHODS, SceneSpec, spec_from, translated_default_scene, visibility_difference  # noqa: E402
 
 #: The scales of `--limits`: 10^e for each e.
 EXPONENTS = [-24, -23, -22, -21, -19, -18, -7, 9, 10, 12, 16, 17]
 
 
 def random_spec(rng: np.random.Generator) -> SceneSpec:
-    """One draw from the ranges of test_properties.scene_specs."""
-    size = rng.uniform(0.3, 1.5)
-    kind = str(rng.choice(["sphere", "box", "needle"]))
-    height = float(rng.choice([0.3 * size, 0.5 * size])) if rng.random() < 0.5 else rng.uniform(0.6 * size, 2.5)
-    radius = float(rng.choice([0.0, 1e-4 * size])) if rng.integers(0, 4) == 0 else rng.uniform(0.02, 2.5) * size
-    return SceneSpec(
-        kind=kind,
-        size=size,
-        height=height,
-        yaw=rng.uniform(0.0, 90.0),
-        second=str(rng.choice(["none", "none", "touching", "intersecting"])),
-        radius=radius,
-        gap=float(rng.choice([1e-3, 1e-2])) if rng.random() < 0.5 else rng.uniform(0.05, 5.0),
-        elevation=rng.uniform(10.0, 90.0),
-        azimuth=rng.uniform(0.0, 360.0),
-    )
+    """One draw from the ranges of test_properties.scene_specs, with ``rng``."""
+    return spec_from(rng.uniform, lambda xs: rng.choice(xs).item(), lambda: rng.random() < 0.5, lambda a, b: int(rng.integers(a, b + 1)))
 
 
 def render(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str) -> np.ndarray | None:

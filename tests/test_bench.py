@@ -64,6 +64,17 @@ def test_the_repository_config_loads_full_and_quick() -> None:
     assert set(full.methods) == set(penumbra.methods()) - {"reference", "adaptive"}, "every method but the peer (and adaptive, too slow for the full run) is benchmarked"
 
 
+def test_set_replaces_top_level_keys(tmp_path: Path) -> None:
+    path = tmp_path / "c.toml"
+    path.write_text("scenes = ['sphere_on_plane']\nsize = 64\n[large]\nscenes = ['sphere_on_plane']\nwidth = 8\nheight = 8\n")
+    cfg = bench.load_config(path, overrides=["scenes = ['cube_on_plane', 'resting_box']", "size=16", "large={}"])
+    assert cfg.scenes == ["cube_on_plane", "resting_box"] and cfg.size == 16 and not cfg.large
+    with pytest.raises(ParameterError, match="unknown key 'sizes'"):
+        bench.load_config(path, overrides=["sizes=3"])
+    with pytest.raises(ParameterError, match="--set takes key=<TOML value>"):
+        bench.load_config(path, overrides=["scenes=[cube"])
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [
@@ -85,6 +96,14 @@ def test_the_repository_config_loads_full_and_quick() -> None:
         ("scenes = [{ scene = 'cube_on_plane', light_radius = [0.1, 0.2], label = 'x' }]\n", "'label' names one scene"),
         ("scenes = [{ scene = 'no_such_scene' }]\n", "unknown scenes"),
         ("scenes = ['sphere_on_plane']\ntable = [1]\n", "'table' must be a list of results.csv column names"),
+        ("scenes = [{ scene = 'cube_on_plane', form = 'soup' }]\n", "reshapes the mesh of a scene with a 'setup'"),
+        ("scenes = ['sphere_on_plane']\n[against.pcss]\nhard = { method = 'hard', keep = 'map_size' }\n", "[against.pcss] maps names to tables"),
+        ("scenes = [{ scene = 'resting_box', camera = { eye = [0, 9, 0] } }]\n", "a scene's 'camera' takes 'eye', 'target'"),
+        ("scenes = ['sphere_on_plane']\ncolumns = ['no_function']\n", "'columns' must be a list of \"module:function\" names"),
+        ("scenes = ['sphere_on_plane']\nresolution_error = 1\n", "'resolution_error' is a factor of the map size of at least 2"),
+        ("scenes = ['sphere_on_plane']\nsampling_noise = 1\n", "'sampling_noise' must be true or false"),
+        ("scenes = ['sphere_on_plane']\n[time_to_error]\nerrors = [0.1]\naggregate = 'max'\n", "[time_to_error] takes 'errors'"),
+        ("scenes = ['sphere_on_plane']\n[large]\nscenes = ['sphere_on_plane']\nwidth = 8\nheight = 8\nresolution_error = -2\n", "[large]: 'resolution_error'"),
     ],
 )
 def test_bad_configs_name_the_problem(tmp_path: Path, text: str, message: str) -> None:
@@ -224,3 +243,112 @@ def test_quick_run_writes_every_output_and_its_numbers_hold(renderer: object, tm
     assert "commit:" in machine and "adapter:" in machine
     if penumbra.adapter_info()["is_software"]:
         assert "timing: cpu_clock" in machine and {r["timing_source"] for r in rows} == {"cpu_clock"}
+
+
+def test_own_noise_is_the_seed_to_seed_rmse_over_sqrt_2_on_the_truths_penumbra() -> None:
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from penumbra import metrics
+
+    truth = np.array([[0.0, 0.5], [1.0, 0.5]])
+    gt = SimpleNamespace(images={"visibility": truth, "radiance": np.repeat(truth[..., None], 3, axis=-1)})
+    a, b = np.array([[0.0, 0.4], [1.0, 0.6]]), np.array([[0.2, 0.6], [1.0, 0.6]])
+    noise = metrics.own_noise((a, b), gt, radiance=(a[..., None] * np.ones(3), b[..., None] * np.ones(3)))
+    assert noise["visibility_rmse_penumbra"] == pytest.approx(metrics.rmse(a[:, 1], b[:, 1]) / math.sqrt(2)), "over the truth's penumbra (column 1)"
+    assert noise["visibility_rmse"] == pytest.approx(metrics.seed_noise(a, b))
+    # Relative to the truth's lit mean (1.0, its one fully lit pixel).
+    assert noise["radiance_rmse_rel"] == pytest.approx(noise["visibility_rmse"])
+    assert "radiance_rmse_rel" not in metrics.own_noise((a, b), SimpleNamespace(images={"visibility": truth}))
+
+
+def _rows(scenes_: dict[str, list[tuple[str, dict, float, float]]]) -> list[dict]:
+    import json
+
+    return [
+        {"scene": s, "size": "8x8", "kind": "peer" if m == "mitsuba" else "method", "method": m, "label": bench.label(p), "params": json.dumps(p),
+         "total_ms": ms, "time_over_hard": 1.0, bench.ERROR: e}
+        for s, rows in scenes_.items() for m, p, ms, e in rows
+    ]
+
+
+def test_time_to_error_splits_curves_and_takes_means_or_medians() -> None:
+    mitsuba = [("mitsuba", {"spp": 4}, 10.0, 0.4), ("mitsuba", {"spp": 16}, 40.0, 0.1)]
+    rows = _rows({
+        "a": [("rt", {"adaptive": False, "n": 1}, 5.0, 0.4), ("rt", {"adaptive": False, "n": 4}, 20.0, 0.1), ("rt", {"adaptive": True, "n": 4}, 2.0, 0.1), *mitsuba],
+        "b": [("rt", {"adaptive": False, "n": 1}, 15.0, 0.4), ("rt", {"adaptive": False, "n": 4}, 60.0, 0.1), ("rt", {"adaptive": True, "n": 4}, 6.0, 0.3), *mitsuba],
+    })
+    text = bench.time_to_error_tables(rows, [0.1], "mean", ["adaptive"])
+    over = text.split("\n\n")[1].splitlines()
+    assert over[0] == "| curve | time to penumbra RMSE 0.1 (ms) | time / Mitsuba's |"
+    # Means over the scenes: plain (10, 0.4), (40, 0.1); adaptive (4, 0.2), short of 0.1: a lower bound.
+    assert over[2:] == ["| rt adaptive=False | 40.0 | 1.00 |", "| rt adaptive=True | ≥ 4.0 | ~ 0.10 |", "| mitsuba | 40.0 | 1.00 |"]
+    assert text.startswith("Means over the scenes:") and "\na:\n" in text and "\nb:\n" in text
+    assert "| rt adaptive=True | ≤ 2.0 | ~ 0.05 |" in text.split("\nb:\n")[0], "per scene: on a, adaptive beats 0.1 at its cheapest point"
+    assert "| rt |" in bench.time_to_error_tables(rows, [0.1]), "no split: one curve per method"
+    assert bench.time_to_error_tables(rows, [0.1]).startswith("Medians over the scenes:")
+
+
+def test_report_rewrites_the_tables_from_results_csv_without_rendering(tmp_path: Path) -> None:
+    (tmp_path / "c.toml").write_text(
+        "scenes = ['sphere_on_plane']\nsize = 8\ntable = ['total_ms']\n[methods]\nhard = [{}]\n"
+        "[time_to_error]\nerrors = [0.2]\naggregate = 'mean'\n"
+    )
+    rows = _rows({"sphere_on_plane": [("hard", {}, 2.0, 0.3), ("mitsuba", {"spp": 4}, 1.0, 0.4), ("mitsuba", {"spp": 16}, 4.0, 0.1)]})
+    bench.write_csv(tmp_path / "results.csv", rows)
+    assert bench.read_csv(tmp_path / "results.csv")[0]["total_ms"] == 2.0, "numbers come back as numbers"
+    assert cli.main(["bench", "--config", str(tmp_path / "c.toml"), "--out", str(tmp_path), "--report"]) == 0
+    for name in ("suite.md", "pareto.md", "ratios.md", "table.md", "time_to_error.md", "pareto.png"):
+        assert (tmp_path / name).stat().st_size > 0, name
+    assert "| hard | ≥ 2.0 | ~ 1.00 |\n| mitsuba | 2.0 | 1.00 |" in (tmp_path / "time_to_error.md").read_text(), "Mitsuba at 0.2: halfway, log-log"
+    assert not (tmp_path / "machine.md").exists(), "nothing rendered"
+    with pytest.raises(ParameterError, match="does not exist: run the benchmark first"):
+        bench.run_from_args(bench.build_parser(__import__("argparse").ArgumentParser()).parse_args(
+            ["--config", str(tmp_path / "c.toml"), "--out", str(tmp_path / "none"), "--report"]))
+
+
+def test_a_form_or_a_camera_variant_is_the_scene_in_that_form_or_from_there(tmp_path: Path) -> None:
+    import penumbra
+
+    if penumbra.scenes.meshes_folder() is None:
+        pytest.skip("needs the shared meshes")
+    welded, soup = bench.SceneVariant("mesh:cube.obj", 0.45, "default", "cube"), bench.SceneVariant("mesh:cube.obj", 0.45, "default", "cube soup", "soup")
+    built = soup.build(8, 8)
+    assert len(built.meshes[1].vertices) == 3 * len(built.meshes[1].faces) == 3 * len(welded.build(8, 8).meshes[1].faces), "every face its own corners"
+    (tmp_path / "c.toml").write_text("scenes = [{ scene = 'resting_box', label = 'above', camera = { eye = [0, 9, 0], target = [0, 0, 0], up = [0, 0, -1] } }]\n")
+    above = bench.load_config(tmp_path / "c.toml").scene("above", 16, 8)
+    assert above.camera.eye == (0.0, 9.0, 0.0) and above.camera.width == 16 and above.name == "above"
+
+
+def _pixel_columns(result: object, scene: object) -> dict[str, float]:
+    """A config's own column (``columns``): it gets every image."""
+    return {"position_pixels": float(result.position.shape[0] * result.position.shape[1]), "same_scene": float(scene.camera.width == 24)}  # type: ignore[attr-defined]
+
+
+@pytest.mark.gpu
+def test_rows_carry_their_own_noise_and_resolution_error(renderer: object, tmp_path: Path) -> None:
+    if not pm.variant().startswith("llvm"):
+        pytest.skip("visibility ground truth needs Mitsuba's llvm variant")
+    (tmp_path / "c.toml").write_text(
+        "scenes = ['sphere_on_plane']\nsize = 24\nground_truth_spp = 16\nradiance = false\nwarmup = 0\nrepeats = 1\n"
+        "sampling_noise = true\nresolution_error = 2\ncolumns = ['test_bench:_pixel_columns']\n[methods]\npcss = [{ map_size = 256 }]\nhard = [{}, { map_size = 256 }]\n"
+        "[peers]\nmitsuba_spp = [4]\n[against.pcss]\nhard = { method = 'hard', keep = ['map_size'], threshold = 0.5 }\n"
+        "itself = {}\n[against.'*']\nfiner = { set = { map_size = 512 }, when = { map_size = 256 } }\nseed = { set = { seed = 1 } }\n"
+    )
+    rows = {(r["method"], r["label"]): r for r in bench.run(bench.load_config(tmp_path / "c.toml"), tmp_path, log=lambda _: None)}
+    pcss = rows[("pcss", "map_size=256")]
+    # Against a row of the run (hard at the same map size): its image and its time.
+    assert 0 < pcss["vs_hard_mean"] <= pcss["vs_hard_max"] <= 1 and pcss["vs_hard_over"] >= 1
+    assert pcss["vs_hard_time"] == pytest.approx(pcss["total_ms"] / rows[("hard", "map_size=256")]["total_ms"])
+    # Against a configuration rendered for the purpose: no time; against itself: nothing.
+    assert 0 < pcss["vs_finer_rmse"] and "vs_finer_time" not in pcss and not any(k.startswith("vs_itself") for k in pcss)
+    # '*': every method, the rows 'when' names, the methods that take the parameters set.
+    assert "vs_finer_max" in rows[("hard", "map_size=256")] and "vs_finer_max" not in rows[("hard", "default")]
+    assert pcss["position_pixels"] == 24 * 24 and pcss["same_scene"] == 1.0, "the columns' function saw positions and the scene"
+    assert "vs_seed_max" in pcss and not any(k.startswith("vs_seed") for k in rows[("hard", "map_size=256")]), "hard takes no seed"
+    rows = {m: r for (m, lab), r in rows.items() if lab in ("default", "map_size=256", "spp=4")}
+    assert "sampling_noise_visibility_rmse" not in rows["hard"], "hard has no seed"
+    assert rows["hard"]["resolution_error_visibility_rmse"] >= 0 and "resolution_error_visibility_rmse" not in rows["mitsuba"]
+    assert 0 < rows["pcss"]["sampling_noise_visibility_rmse_penumbra"] < 0.5 and 0 < rows["pcss"]["resolution_error_visibility_rmse_penumbra"] < 0.5
+    assert 0 < rows["mitsuba"]["sampling_noise_visibility_rmse_penumbra"] < 0.5, "Mitsuba's own noise at 4 spp"

@@ -112,7 +112,7 @@ def test_hard_matches_exact_ray_casting_beyond_the_outline(renderer: penumbra.Re
     # With its default bias, `hard` at radius 0 agrees with CPU ray casting of
     # the light's centre everywhere but a one-pixel band along shadow outlines:
     # no acne, no light leaks (the table in docs/methods/hard.md comes from
-    # `python benchmarks/point_light.py bias`, the same comparison at 256x256).
+    # `python benchmarks/point_light.py`, the same comparison at 256x256).
     scene = penumbra.scenes.get(name, width=128, height=128, light_radius=0.0)
     result = renderer.render(scene)
     geometry = result.object_id >= 0
@@ -121,6 +121,24 @@ def test_hard_matches_exact_ray_casting_beyond_the_outline(renderer: penumbra.Re
     wrong = geometry & ((result.visibility > 0.5) != exact) & ~outline_band(exact)
     assert not wrong.any(), f"{wrong.sum()} pixels disagree beyond the outline"
     assert (geometry & ~exact).sum() > 0.02 * geometry.sum(), "the scene has shadows to get wrong"
+
+
+def test_point_light_errors_count_acne_and_leaks_beyond_and_on_the_outline() -> None:
+    from types import SimpleNamespace
+
+    from penumbra.raycast import point_light_errors
+
+    exact = np.zeros((6, 6), dtype=bool)
+    exact[:, :3] = True  # lit on the left; the outline band is columns 2 and 3
+    visibility = exact.astype(np.float32)
+    visibility[0, 0] = 0.0  # acne beyond the band
+    visibility[5, 2] = 0.0  # acne on it
+    visibility[1, 5] = 1.0  # a leak beyond it
+    object_id = np.zeros((6, 6), dtype=np.int32)
+    object_id[5, 5] = -1  # background: not counted
+    visibility[5, 5] = 1.0
+    e = point_light_errors(SimpleNamespace(object_id=object_id, visibility=visibility), penumbra.scenes.get(), exact)
+    assert e == {"acne": 1.0, "leak": 1.0, "acne_on_outline": 1.0, "leak_on_outline": 0.0, "geometry_pixels": 35.0}
 
 
 def test_ray_caster_sees_a_blocker() -> None:

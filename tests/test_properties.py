@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import pytest
@@ -97,25 +97,32 @@ def _mesh(m: trimesh.Trimesh, name: str, object_id: int, place: Any) -> penumbra
     return penumbra.Mesh(place(m.vertices), m.faces, albedo=0.7, object_id=object_id, name=name)
 
 
-@st.composite
-def scene_specs(draw: st.DrawFn) -> SceneSpec:
-    size = draw(st.floats(0.3, 1.5))
-    kind = draw(st.sampled_from(["sphere", "box", "needle"]))
+def spec_from(floats: Callable[[float, float], float], sampled_from: Callable[[list[Any]], Any], booleans: Callable[[], bool], integers: Callable[[int, int], int]) -> SceneSpec:
+    """One random scene from the ranges of the property tests, drawn with the
+    four given functions: hypothesis's strategies (:func:`scene_specs`) or a
+    seeded generator (benchmarks/stability.py draws many more this way)."""
+    size = floats(0.3, 1.5)
+    kind = sampled_from(["sphere", "box", "needle"])
     # Heights from sunk into the ground (intersecting) through touching to floating.
-    height = draw(st.sampled_from([0.3 * size, 0.5 * size])) if draw(st.booleans()) else draw(st.floats(0.6 * size, 2.5))
-    radius = draw(st.sampled_from([0.0, 1e-4 * size])) if draw(st.integers(0, 3)) == 0 else draw(st.floats(0.02, 2.5)) * size
+    height = sampled_from([0.3 * size, 0.5 * size]) if booleans() else floats(0.6 * size, 2.5)
+    radius = sampled_from([0.0, 1e-4 * size]) if integers(0, 3) == 0 else floats(0.02, 2.5) * size
     return SceneSpec(
         kind=kind,
         size=size,
         height=height,
-        yaw=draw(st.floats(0.0, 90.0)),
-        second=draw(st.sampled_from(["none", "none", "touching", "intersecting"])),
+        yaw=floats(0.0, 90.0),
+        second=sampled_from(["none", "none", "touching", "intersecting"]),
         radius=radius,
-        gap=draw(st.sampled_from([1e-3, 1e-2])) if draw(st.booleans()) else draw(st.floats(0.05, 5.0)),
+        gap=sampled_from([1e-3, 1e-2]) if booleans() else floats(0.05, 5.0),
         # Down to 10 degrees above the ground: grazing on the slab.
-        elevation=draw(st.floats(10.0, 90.0)),
-        azimuth=draw(st.floats(0.0, 360.0)),
+        elevation=floats(10.0, 90.0),
+        azimuth=floats(0.0, 360.0),
     )
+
+
+@st.composite
+def scene_specs(draw: st.DrawFn) -> SceneSpec:
+    return spec_from(lambda a, b: draw(st.floats(a, b)), lambda xs: draw(st.sampled_from(xs)), lambda: draw(st.booleans()), lambda a, b: draw(st.integers(a, b)))
 
 
 def render(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str, **extra: object) -> penumbra.RenderResult:

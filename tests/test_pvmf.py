@@ -226,7 +226,7 @@ def test_thin_closed_casters_do_not_shadow_their_lit_face(renderer: penumbra.Ren
     spans along its slope has its back faces (the second-depth map) within
     that depth of its lit top, which then shadowed itself: visibility
     0.57-0.75 on the top of a 1e-4 plate under pvmf's former default,
-    `second_depth` (`benchmarks/point_light.py bias` counts it for `hard`: 548-1011
+    `second_depth` (`benchmarks/point_light.py` counts it for `hard`: 548-1011
     acne pixels). pvmf now defaults to `slope`, as `hard` does: the top is
     lit, with a point light and with an area light."""
     base = penumbra.scenes.get(width=96, height=96)

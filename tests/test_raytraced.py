@@ -94,7 +94,7 @@ def test_point_light_is_one_ray_and_equals_cpu_ray_casting(rt: penumbra.Renderer
     exact[geometry] = point_light_visibility(scene, same.position[geometry], same.normal[geometry])
     np.testing.assert_array_equal(same.visibility, exact)
     assert 0 < exact[geometry].mean() < 1, "the scene has shadows to get wrong"
-    # With the default offset: no acne and no leak beyond the outline (`benchmarks/point_light.py offsets`).
+    # With the default offset: no acne and no leak beyond the outline (`penumbra bench --config benchmarks/ray_offsets.toml`).
     default = rt.render(scene, "raytraced")
     wrong = geometry & ((default.visibility > 0.5) != (exact > 0.5)) & ~outline_band(exact > 0.5)
     assert not wrong.any(), f"{wrong.sum()} pixels disagree beyond the outline"
@@ -169,8 +169,8 @@ def test_adaptive_mode_refines_only_the_penumbra_and_matches_plain_mode(rt: penu
         kept = d > 0
         assert np.isin(adaptive.visibility[kept], [0.0, 1.0]).all(), name
         assert (d == 0).sum() >= adaptive.stats["full_pixels"], name
-        # Misses (measured by `benchmarks/raytraced.py adaptive` at 128x128 with
-        # 256 samples: ... of the penumbra's pixels at the defaults).
+        # Misses (measured by `penumbra bench --config benchmarks/raytraced_adaptive.toml` at 128x128 with
+        # 256 samples: 2 of the 10103 penumbra pixels of nine scenes at the defaults).
         region = metrics.penumbra_region(plain.visibility)
         assert (d > 0.01).sum() <= max(2, 0.01 * region.sum()), (name, (d > 0.01).sum(), region.sum())
 
@@ -202,8 +202,8 @@ def test_unbiased_against_mitsuba_and_error_falls_with_samples(rt: penumbra.Rend
             if n == 1024:
                 error = metrics.rmse(a, gt.visibility, region)
                 combined = math.hypot(gt_noise, own[n])
-                # No bias: the error is the two estimators' noise (ratios 0.8-1.0
-                # at 96x96 in `benchmarks/raytraced.py accuracy`).
+                # No bias: the error is the two estimators' noise (ratios 0.93-1.31
+                # at 96x96 in `penumbra bench --config benchmarks/raytraced_accuracy.toml`).
                 assert error < 1.5 * combined, (name, error, gt_noise, own[n])
         # 1/sqrt(n) would divide the noise by 4 from 16 to 256 samples; stratification does better.
         assert own[16] / own[256] > 3.0, (name, own)

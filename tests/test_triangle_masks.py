@@ -2,12 +2,14 @@
 Eisemann & Assarsson 2008; issue 34), exact at `reference`'s and
 `raytraced`'s light samples without ray queries.
 
-The tolerances come from `python3 benchmarks/triangle_masks.py agreement`
-(64x64, 64 and 256 samples, the built-in scenes, three shared meshes, the
-Cornell box and a triangle soup): against `raytraced` no pixel of ~45k
-differed by more than 1e-5; against `reference` (shadow maps: depth bias and
-texel size) the mean absolute difference was at most 0.0009 and at most 3.7%
-of the pixels differed by more than 1/n_samples.
+The tolerances come from the agreement study (64x64, 64 and 256 samples, the
+built-in scenes, three shared meshes, the Cornell box and a triangle soup;
+now `penumbra bench --config benchmarks/triangle_masks_agreement.toml`, with
+spot's soup for this file's crossing one): against `raytraced` no pixel of
+~45k differed by more than 1e-5; against `reference` (shadow maps: depth
+bias and texel size) the mean absolute difference was at most 0.0009 and at
+most 3.7% of the pixels differed by more than 1/n_samples (the config: 7e-7
+at most, 0.00075 and 3.3%).
 
 Tests comparing with `raytraced` skip without ray queries (conftest.py);
 the others run on every adapter.

@@ -213,27 +213,18 @@ def test_visibility_does_not_depend_on_the_scene_scale(renderer: penumbra.Render
         np.testing.assert_allclose(got, expected, atol=2e-3)
 
 
-def thin_prism() -> penumbra.Mesh:
-    """benchmarks/exact_edges.py's acute caster: a triangle with a 23-degree tip, 0.1 thick."""
-    pts = np.array([(-1.5, -0.6), (1.5, 0.0), (-1.5, 0.6)])
-    v = np.vstack([np.c_[pts[:, 0], np.full(3, 1.9), pts[:, 1]], np.c_[pts[:, 0], np.full(3, 2.0), pts[:, 1]]])
-    f = np.array([[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [2, 0, 3], [2, 3, 5]])[:, ::-1]
-    return penumbra.Mesh(v, np.ascontiguousarray(f), object_id=1, name="prism")
-
-
 def test_extra_wedges_at_an_acute_tip_bring_it_closer_to_ground_truth(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
-    """4.1, Figure 7: measured at 96x96 (benchmarks/exact_edges.py --parts acute has 128x128):
-    acute_wedges=6 takes the penumbra RMSE from 0.073 to 0.055 (0.76 of it)."""
+    """4.1, Figure 7, on `scenes.acute_caster` (a 23-degree tip): measured at
+    96x96 (benchmarks/acute_wedges.toml has 128x128): acute_wedges=6 takes
+    the penumbra RMSE from 0.073 to 0.055 (0.76 of it)."""
     pm = pytest.importorskip("penumbra.mitsuba", reason="Mitsuba 3 is not installed")
     from penumbra import metrics
 
     import trimesh
 
-    caster = thin_prism()
+    scene = penumbra.scenes.get("acute_caster", width=96, height=96)
+    caster = scene.meshes[1]
     assert trimesh.Trimesh(caster.vertices, caster.faces, process=False).volume > 0, "outward faces"
-    light = penumbra.SphereLight((0.0, 5.0, 0.0), 0.3, intensity=40.0)
-    camera = penumbra.Camera.look_at((0.0, 6.0, 3.0), (0.3, 0.0, 0.0), fov_y=45, width=96, height=96)
-    scene = penumbra.Scene([ground_slab(half_size=4.0), caster], light, camera)
     gt = pm.ground_truth(scene, spp=256, cache_dir=tmp_path_factory.mktemp("gt"), kinds=("visibility",)).visibility
     region = metrics.penumbra_region(gt)
     plain = renderer.render(scene, "wedges", **INTERPOLATION)

@@ -29,6 +29,7 @@ __all__ = [
     "rmse",
     "mae",
     "seed_noise",
+    "own_noise",
     "flip",
     "compare_images",
     "compare",
@@ -102,6 +103,27 @@ def seed_noise(a: np.ndarray, b: np.ndarray, mask: np.ndarray | None = None) -> 
     ``mask`` divided by sqrt(2), since independent noise adds in quadrature.
     The one place the benchmarks and the ``noise_<metric>`` keys take it from."""
     return rmse(a, b, mask) / math.sqrt(2)
+
+
+def own_noise(
+    visibility: tuple[np.ndarray, np.ndarray],
+    gt: "GroundTruth",
+    *,
+    radiance: tuple[np.ndarray, np.ndarray] | None = None,
+    object_id: np.ndarray | None = None,
+) -> dict[str, float]:
+    """A sampling estimate's own noise, from two renders that differ only in
+    their seed (:func:`seed_noise`): ``visibility_rmse`` over all pixels,
+    ``visibility_rmse_penumbra`` over the ground truth's penumbra region and,
+    with ``radiance``, ``radiance_rmse_rel`` relative to the ground truth's
+    :func:`lit_mean` off silhouettes (``object_id`` gives them): the
+    ``noise_<metric>`` of ground truth, for a method or a peer."""
+    gv = gt.images["visibility"]
+    out = {"visibility_rmse": seed_noise(*visibility), "visibility_rmse_penumbra": seed_noise(*visibility, penumbra_region(gv))}
+    if radiance is not None and "radiance" in gt.images:
+        keep = ~silhouette_band(object_id) if object_id is not None else np.ones(gv.shape, dtype=bool)
+        out["radiance_rmse_rel"] = seed_noise(*radiance, keep) / lit_mean(gt.images["radiance"], gv)
+    return out
 
 
 def mae(a: np.ndarray, b: np.ndarray, mask: np.ndarray | None = None) -> float:

@@ -165,11 +165,14 @@ def get(name: str = DEFAULT, *, width: int | None = None, height: int | None = N
     ``"generated:<seed>"`` (:func:`generate`), ``"mesh:<file>"``
     (:func:`from_mesh`, ``setup="close"``), ``"wide_floor:<file>"``
     (:func:`wide_floor`), ``"cornell_box"`` and ``"sponza"``; and
-    ``"wide_floor"``, :func:`wide_floor` with its box caster (no mesh file)."""
+    ``"wide_floor"``, :func:`wide_floor` with its box caster, and
+    ``"acute_caster"``, :func:`acute_caster` (no mesh file)."""
     if not isinstance(name, str):
         raise ParameterError(f"unknown scene {name!r}: a scene name is a string; built-in scenes: {names()}")
     if name in _SCENES:
         scene = _SCENES[name]()
+    elif name == "acute_caster":
+        scene = acute_caster()
     elif name == "wide_floor":
         scene = wide_floor(width=_WIDTH if width is None else width, height=height if height is not None else (_HEIGHT if width is None else width))
     else:
@@ -200,7 +203,7 @@ def _parse(name: str) -> tuple[str, str]:
     """(kind, argument) of a scene name that is not built in; a
     :class:`ParameterError` naming the forms for anything else."""
     kind, _, arg = name.partition(":")
-    if name in ("cornell_box", "sponza", "wide_floor"):
+    if name in ("cornell_box", "sponza", "wide_floor", "acute_caster"):
         return name, ""
     if kind == "generated" and arg.isdigit():
         return kind, arg
@@ -371,6 +374,19 @@ def real_mesh_suite(folder: str, *, width: int = 160, height: int = 160, meshes:
             scene = from_mesh(f"{folder}/{mesh}", width=width, height=height, light_radius=radius, setup=setup)
             out[f"{mesh} {setup} r={radius}"] = scene
     return out
+
+
+def acute_caster(*, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.3) -> Scene:
+    """A thin triangular prism, 0.1 thick and 1.9 over an 8 x 8 slab, with a
+    23-degree tip and two 78-degree corners, under a light at height 5: the
+    acute silhouette vertex of penumbra wedges' 4.1 (Figure 7, ``acute_wedges``)."""
+    pts = np.array([(-1.5, -0.6), (1.5, 0.0), (-1.5, 0.6)])
+    v = np.vstack([np.c_[pts[:, 0], np.full(3, y), pts[:, 1]] for y in (1.9, 2.0)])
+    # Outward: the bottom and top triangles, then the three sides.
+    f = np.array([[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [2, 0, 3], [2, 3, 5]])[:, ::-1]
+    caster = Mesh(v, np.ascontiguousarray(f), object_id=1, name="prism")
+    camera = Camera.look_at((0.0, 6.0, 3.0), (0.3, 0.0, 0.0), fov_y=45, width=width, height=height)
+    return Scene([ground_slab(half_size=4.0), caster], SphereLight((0.0, 5.0, 0.0), light_radius, intensity=40.0), camera, name="acute_caster")
 
 
 def wide_floor(path: str | None = None, *, width: int = _WIDTH, height: int = _HEIGHT, light_radius: float = 0.3) -> Scene:

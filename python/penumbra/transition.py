@@ -15,13 +15,16 @@ measure does not depend on the camera.
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
 from penumbra.scene import Scene, world_geometry
 
-__all__ = ["standing_edges", "transition_width"]
+__all__ = ["standing_edges", "transition_width", "contact_widths", "DISTANCES"]
+
+#: The distances from the contact of :func:`contact_widths` (world units).
+DISTANCES = (0.15, 0.35, 0.55, 0.75)
 
 
 def standing_edges(scene: Scene, mesh: int) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -60,3 +63,16 @@ def transition_width(
     across = (p - corner) @ np.array([-d[1], d[0]])
     moving = receiver & (visibility > low) & (visibility < high) & (np.abs(across) < window)
     return [float(area[moving & (np.abs(along - t) < half_band)].sum() / (2 * half_band)) for t in distances]
+
+
+def contact_widths(result: Any, scene: Scene) -> dict[str, float]:
+    """``width_t<t>_edge<k>``: the transition widths at :data:`DISTANCES`
+    across the shadows of the two standing edges of ``scene.meshes[1]`` on
+    the ground (mesh 0), from a render with positions: ``penumbra bench``'s
+    ``columns = ["penumbra.transition:contact_widths"]``."""
+    foot, corners = standing_edges(scene, 1)
+    out = {}
+    for k, corner in enumerate(corners, 1):
+        widths = transition_width(result.visibility, result.position, result.object_id == 0, foot, corner, DISTANCES)
+        out.update({f"width_t{t:g}_edge{k}": w for t, w in zip(DISTANCES, widths)})
+    return out

@@ -24,7 +24,17 @@ Written to ``--out`` (default ``benchmarks/results/<config name>``):
   penumbra area on screen (a light-radius sweep);
 - ``table.md`` (with a ``table`` list of columns): one line per scene and
   configuration with those columns of ``results.csv``, a study's own table;
+- ``time_to_error.md`` (with a ``[time_to_error]`` table): each curve's time
+  to given penumbra RMSEs over the scenes (means or medians) and per scene,
+  beside Mitsuba's;
 - ``machine.md``: the machine, the adapter, the versions and the commit.
+
+``--report`` renders nothing and writes the reports again from a finished
+run's ``results.csv``. ``sampling_noise = true`` adds each row's own noise
+(the configuration again at its seed + 1; Mitsuba's rows at another seed),
+``resolution_error = k`` its RMSE against the same configuration at k times
+its map size; a ``form`` in a scene table (``"soup"``, ...) hands the mesh
+over in that form, a ``camera`` sets another view.
 
 An entry of ``scenes`` is a scene name or a table of variants: ``{ scene =
 "cube_on_plane", light_radius = [0.1, 0.4] }`` (a light-radius sweep),
@@ -51,10 +61,13 @@ from penumbra.bench.report import (
     plot_pareto,
     plot_scaling,
     ratio_tables,
+    read_csv,
     time_at_error,
+    time_to_error_tables,
     write_csv,
 )
-from penumbra.bench.runner import machine_description, make_renderer, run, run_scaling
+from penumbra.bench.runner import machine_description, make_renderer, run, run_scaling, write_reports
+from penumbra.errors import ParameterError
 
 __all__ = [
     "BenchConfig",
@@ -76,6 +89,9 @@ __all__ = [
     "plot_pareto",
     "plot_scaling",
     "write_csv",
+    "read_csv",
+    "time_to_error_tables",
+    "write_reports",
     "markdown_table",
     "main",
     "build_parser",
@@ -93,11 +109,21 @@ def build_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--quick", action="store_true", help="apply the config's [quick] table (the CI run: a few minutes)")
     parser.add_argument("--out", help="output folder (default benchmarks/results/<config name>)")
     parser.add_argument("--fresh", action="store_true", help="ignore the rows of scenes an interrupted run finished (out/rows.jsonl)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="replace a top-level key of the config with a TOML value (repeatable): --set 'scenes=[\"cornell_box\"]' --set 'large={}'")
+    parser.add_argument("--report", action="store_true", help="render nothing: write the reports again from the run's out/results.csv (after a change to the config's report keys)")
     return parser
 
 
 def run_from_args(args: argparse.Namespace) -> int:
-    cfg = load_config(args.config, quick=args.quick)
-    out = args.out or str(Path("benchmarks") / "results" / cfg.name)
+    cfg = load_config(args.config, quick=args.quick, overrides=args.set)
+    out = Path(args.out or Path("benchmarks") / "results" / cfg.name)
+    if args.report:
+        if not (out / "results.csv").exists():
+            raise ParameterError(f"--report reads {out / 'results.csv'}, which does not exist: run the benchmark first")
+        rows = read_csv(out / "results.csv")
+        for row in rows:  # a results.csv from before the [large] part has no size: all at the main one
+            row.setdefault("size", f"{cfg.size}x{cfg.size}")
+        print(f"wrote {out}/" + ", ".join(write_reports(cfg, out, rows)))
+        return 0
     run(cfg, out, fresh=args.fresh)
     return 0

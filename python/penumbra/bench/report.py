@@ -4,6 +4,7 @@ markdown tables, the plots and the CSV files."""
 from __future__ import annotations
 
 import csv
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +26,8 @@ __all__ = [
     "suite_tables",
     "what_to_use",
     "markdown_table",
+    "read_csv",
+    "time_to_error_tables",
     "BUDGETS",
 ]
 
@@ -74,6 +77,20 @@ def write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
         writer = csv.DictWriter(f, fieldnames=columns)
         writer.writeheader()
         writer.writerows(rows)
+
+
+def read_csv(path: Path) -> list[dict[str, Any]]:
+    """A ``results.csv`` read back as :func:`write_csv` wrote it: numbers as
+    floats, empty cells dropped (a column the row did not have)."""
+
+    def value(text: str) -> Any:
+        try:
+            return float(text)
+        except ValueError:
+            return text
+
+    with open(path, newline="") as f:
+        return [{k: value(v) for k, v in row.items() if v != ""} for row in csv.DictReader(f)]
 
 
 @dataclass
@@ -321,3 +338,45 @@ def markdown_table(rows: list[dict[str, Any]], columns: Sequence[str]) -> str:
     for r in rows:
         lines.append("| " + " | ".join([str(r["scene"]), str(r["size"]), str(r["method"]), str(r["label"]), *(_cell(r.get(c)) for c in columns)]) + " |")
     return "\n".join(lines) + "\n"
+
+
+def _curve(row: dict[str, Any], split: Sequence[str]) -> str:
+    params = json.loads(row["params"]) if row.get("params") else {}
+    return " ".join([str(row["method"]), *(f"{k}={params[k]}" for k in split if k in params)])
+
+
+def _time_to(rows: list[dict[str, Any]], errors: Sequence[float], aggregate: str, split: Sequence[str], title: str) -> list[str]:
+    reduce = np.mean if aggregate == "mean" else np.median
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault((_curve(r, split), str(r["label"])), []).append(r)
+    curves: dict[str, list[tuple[float, float]]] = {}
+    for (name, _), g in groups.items():
+        err = [float(r[ERROR]) for r in g if math.isfinite(float(r[ERROR]))]
+        if err:
+            curves.setdefault(name, []).append((float(reduce([float(r["total_ms"]) for r in g])), float(reduce(err))))
+    names = [n for n in curves if n != "mitsuba"] + (["mitsuba"] if "mitsuba" in curves else [])
+    lines = [title, "", "| curve | " + " | ".join(f"time to penumbra RMSE {e:g} (ms) | time / Mitsuba's" for e in errors) + " |", "|---|" + "---|---|" * len(errors)]
+    for name in names:
+        cells = []
+        for e in errors:
+            t, bound = time_at_error(curves[name], e)
+            peer = time_at_error(curves.get("mitsuba", []), e)
+            ratio = t / peer[0] if math.isfinite(t) and math.isfinite(peer[0]) and peer[0] > 0 else math.nan
+            # "~": a bound on either side makes the ratio approximate.
+            cells += [f"{ {'=': '', '<=': '≤ ', '>=': '≥ '}[bound]}{t:.1f}", ("" if bound == "=" and peer[1] == "=" else "~ ") + f"{ratio:.2f}"]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return lines + [""]
+
+
+def time_to_error_tables(rows: list[dict[str, Any]], errors: Sequence[float], aggregate: str = "median", split: Sequence[str] = ()) -> str:
+    """Each curve's time to each penumbra RMSE in ``errors``, interpolated
+    log-log along its Pareto front (:func:`time_at_error`; ≤ / ≥ mark the
+    bounds), beside its time over Mitsuba's: first over the scenes (the
+    ``aggregate``, ``mean`` or ``median``, of each setting's time and error),
+    then per scene. A curve is a method, or a method at each value of the
+    ``split`` parameters (``raytraced adaptive=True``)."""
+    out = _time_to(rows, errors, aggregate, split, f"{aggregate.capitalize()}s over the scenes:")
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        out += _time_to([r for r in rows if r["scene"] == scene], errors, aggregate, split, f"{scene}:")
+    return "\n".join(out)

@@ -5,6 +5,7 @@ truth, the peers (Mitsuba's estimator, ``reference``) and the scaling runs."""
 from __future__ import annotations
 
 import hashlib
+import importlib
 import json
 import math
 import os
@@ -22,13 +23,13 @@ import numpy as np
 from penumbra import metrics, scenes
 from penumbra import mitsuba as pm
 from penumbra.bench.config import BenchConfig, expand, label
-from penumbra.bench.report import ERROR, aggregate, markdown_table, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, what_to_use, write_csv
-from penumbra.errors import GpuFeatureError, ParameterError, SceneError
+from penumbra.bench.report import ERROR, aggregate, markdown_table, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, time_to_error_tables, what_to_use, write_csv
+from penumbra.errors import GpuFeatureError, ParameterError, PenumbraError, SceneError
 from penumbra.grid import result_columns
-from penumbra.render import Renderer, RenderResult, methods
+from penumbra.render import Renderer, RenderResult, method_info, methods
 from penumbra.scene import Scene
 
-__all__ = ["run", "run_scaling", "make_renderer", "machine_description", "parts", "Part", "with_mitsuba_ratios", "MITSUBA_RULE"]
+__all__ = ["run", "write_reports", "run_scaling", "make_renderer", "machine_description", "parts", "Part", "with_mitsuba_ratios", "MITSUBA_RULE"]
 
 
 #: What the rows are computed from: the metrics read visibility, radiance and object ids.
@@ -36,11 +37,12 @@ OUTPUTS = ["radiance", "visibility", "object_id"]
 
 
 def _median_render(renderer: Renderer, scene: Scene, method: str, params: dict[str, Any], cfg: BenchConfig) -> tuple[RenderResult, dict[str, float], int]:
+    outputs = OUTPUTS + ["position", "normal"] if cfg.columns else OUTPUTS  # a config's own columns may read them
     for _ in range(cfg.warmup):
-        renderer.render(scene, method, outputs=OUTPUTS, **params)
+        renderer.render(scene, method, outputs=outputs, **params)
     results = []
     for _ in range(cfg.repeats):
-        results.append(renderer.render(scene, method, outputs=OUTPUTS, **params))
+        results.append(renderer.render(scene, method, outputs=outputs, **params))
         if results[-1].total_ms > cfg.max_seconds_per_config * 1000:
             break
     passes = {name: statistics.median(r.timings.get(name, 0.0) for r in results) for name in results[-1].timings}
@@ -81,17 +83,20 @@ class Part:
     ground_truth_spp: int
     methods: dict[str, list[dict[str, Any]]]
     peers: dict[str, Any]
+    sampling_noise: bool = False
+    resolution_error: int = 0
 
 
 def parts(cfg: BenchConfig) -> list[Part]:
     """The run's parts: the main one at ``size`` and, with a ``[large]``
     table, its scenes at its ``width`` x ``height`` (its own ``methods``,
     ``peers`` and ``ground_truth_spp`` where given, else the main ones)."""
-    out = [Part("main", cfg.scenes, cfg.size, cfg.size, cfg.ground_truth_spp, cfg.methods, cfg.peers)]
+    out = [Part("main", cfg.scenes, cfg.size, cfg.size, cfg.ground_truth_spp, cfg.methods, cfg.peers, cfg.sampling_noise, cfg.resolution_error)]
     if cfg.large:
         big = cfg.large
         out.append(Part("large", list(big["scenes"]), int(big["width"]), int(big["height"]), int(big.get("ground_truth_spp", cfg.ground_truth_spp)),
-                        big.get("methods", cfg.methods), big.get("peers", cfg.peers)))
+                        big.get("methods", cfg.methods), big.get("peers", cfg.peers), big.get("sampling_noise", cfg.sampling_noise),
+                        big.get("resolution_error", cfg.resolution_error)))
     return out
 
 
@@ -109,6 +114,7 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
     hard_ms = math.nan
     object_id = None
     rows: list[dict[str, Any]] = []
+    done: dict[tuple[str, str], tuple[dict[str, Any], dict[str, Any], np.ndarray]] = {}  # (method, label) -> grid params, row, visibility
     for kind, method, params in configs:
         try:
             result, passes, repeats = _median_render(renderer, scene, method, params, cfg)
@@ -128,9 +134,17 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
             **result_columns(result, timings=passes, total_ms=total),
         }
         row.update(metrics.compare(result, gt))
+        row.update(_own_errors(renderer, scene, method, params, result, gt, part))
+        for name in cfg.columns:
+            module, _, function = name.partition(":")
+            row.update(getattr(importlib.import_module(module), function)(result, scene))
         object_id = result.object_id
         rows.append(row)
+        done[(method, label(params))] = (params, row, result.visibility)
         log(f"{scene_name[:30]:30s} {method:9s} {row['label']:40.40s} {row['total_ms']:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
+    for params, row, visibility in list(done.values()):
+        for name, entry in {**cfg.against.get("*", {}), **cfg.against.get(row["method"], {})}.items():
+            row.update(_against(renderer, scene, row, params, visibility, name, entry, done, gt, object_id))
     spps = part.peers.get("mitsuba_spp", [])
     if spps:
         pm.ground_truth(scene, spp=min(spps), seed=2, kinds=kinds, cache=False)  # warm-up: Dr.Jit compiles its kernels
@@ -147,9 +161,58 @@ def _scene_rows(renderer: Renderer, cfg: BenchConfig, part: Part, scene_name: st
             "timing_source": "cpu_clock", "total_ms": vis_ms, "time_over_hard": vis_ms / hard_ms,
             "ms_visibility": vis_ms, "ms_radiance": rad_ms, **m,
         }
+        if part.sampling_noise:
+            again = pm.ground_truth(scene, spp=spp, seed=3, kinds=kinds, cache=False).images
+            both = (rad["radiance"], again["radiance"]) if cfg.radiance else None
+            noise = metrics.own_noise((images["visibility"], again["visibility"]), gt, radiance=both, object_id=object_id)
+            row.update({f"sampling_noise_{k}": v for k, v in noise.items()})
         rows.append(row)
         log(f"{scene_name[:30]:30s} mitsuba   {row['label']:40.40s} {vis_ms:9.1f} ms  x{row['time_over_hard']:6.2f} hard  penumbra RMSE {row[ERROR]:.4f}")
     return with_mitsuba_ratios(rows)
+
+
+def _against(renderer: Renderer, scene: Scene, row: dict[str, Any], params: dict[str, Any], visibility: np.ndarray, name: str, entry: dict[str, Any],
+             done: dict[tuple[str, str], tuple[dict[str, Any], dict[str, Any], np.ndarray]], gt: pm.GroundTruth, object_id: np.ndarray | None) -> dict[str, float]:
+    """The ``vs_<name>_*`` columns of one row (:attr:`BenchConfig.against`):
+    its visibility against the configuration ``entry`` names, that row's
+    image where the run has it, else rendered for the purpose."""
+    method = entry.get("method", row["method"])
+    keep = entry.get("keep")
+    other = {**{k: v for k, v in params.items() if keep is None or k in keep}, **entry.get("set", {})}
+    when = entry.get("when", {})
+    if (method, other) == (row["method"], params) or any(params.get(k) != v for k, v in when.items()) or not set(other) <= set(method_info(method).defaults()):
+        return {}  # itself; a row the entry is not for; a parameter the method does not take (a seed for hard)
+    found = done.get((method, label(other)))
+    try:
+        theirs = found[2] if found else renderer.render(scene, method, outputs=OUTPUTS, **other).visibility
+    except PenumbraError:  # a configuration the scene or the adapter refuses (maps past its limits)
+        return {}
+    threshold = entry.get("threshold", 0.01)
+    if threshold == "one_sample":  # one sample's weight, and float rounding
+        threshold = 1.0 / float(json.loads(row["params"])["n_samples"]) + 1e-6
+    geometry = object_id >= 0 if object_id is not None else np.ones(visibility.shape, dtype=bool)
+    d = np.abs(visibility.astype(np.float64) - theirs)
+    out = {"max": float(d[geometry].max()), "mean": float(d[geometry].mean()), "rmse": metrics.rmse(visibility, theirs, geometry),
+           "rmse_penumbra": metrics.rmse(visibility, theirs, metrics.penumbra_region(gt.visibility)), "over": float((d[geometry] > threshold).sum())}
+    if found:
+        out["time"] = float(row["total_ms"]) / float(found[1]["total_ms"])
+    return {f"vs_{name}_{k}": v for k, v in out.items()}
+
+
+def _own_errors(renderer: Renderer, scene: Scene, method: str, params: dict[str, Any], result: RenderResult, gt: pm.GroundTruth, part: Part) -> dict[str, float]:
+    """A row's own noise (the same configuration at its seed + 1) and
+    resolution error (at ``resolution_error`` times its map size), where the
+    part asks for them and the method has a seed or a map size."""
+    out: dict[str, float] = {}
+    if part.sampling_noise and "seed" in result.params:
+        again = renderer.render(scene, method, outputs=OUTPUTS, **{**params, "seed": int(result.params["seed"]) + 1})
+        noise = metrics.own_noise((result.visibility, again.visibility), gt, radiance=(result.radiance, again.radiance), object_id=result.object_id)
+        out.update({f"sampling_noise_{k}": v for k, v in noise.items()})
+    if part.resolution_error and isinstance(result.params.get("map_size"), int):
+        finer = renderer.render(scene, method, outputs=OUTPUTS, **{**params, "map_size": part.resolution_error * int(result.params["map_size"])}).visibility
+        out["resolution_error_visibility_rmse"] = metrics.rmse(result.visibility, finer)
+        out["resolution_error_visibility_rmse_penumbra"] = metrics.rmse(result.visibility, finer, metrics.penumbra_region(gt.visibility))
+    return out
 
 
 #: How a row's time is set against Mitsuba's (the rule the report states).
@@ -184,6 +247,7 @@ def _key(cfg: BenchConfig, part: Part, scene_name: str, commit: str) -> str:
     size, truth, grids and peers, and the timing settings."""
     variant = cfg.variants.get(scene_name)
     text = json.dumps([commit, scene_name, repr(variant) if variant else None, part.width, part.height, part.ground_truth_spp, part.methods, part.peers,
+                       part.sampling_noise, part.resolution_error, cfg.against, cfg.columns,
                        cfg.repeats, cfg.warmup, cfg.max_seconds_per_config, cfg.radiance], sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
@@ -235,23 +299,36 @@ def run(cfg: BenchConfig, out: str | os.PathLike[str], log: Callable[[str], None
     if refused:
         (out / "refused.md").write_text("".join(f"- {r['scene']} {r['size']} {r['method']} {r['label']}: {r['refused']}\n" for r in refused))
     write_csv(out / "results.csv", rows)
-    main_rows = [r for r in rows if r["size"] == f"{cfg.size}x{cfg.size}"]
-    summary = aggregate(main_rows)
-    (out / "pareto.md").write_text(pareto_table(summary))
-    (out / "ratios.md").write_text(ratio_tables(main_rows, summary))
-    (out / "suite.md").write_text(suite_tables(rows) + "\n" + what_to_use(rows) + "\n" + MITSUBA_RULE[0].upper() + MITSUBA_RULE[1:] + ".\n")
-    if cfg.table:
-        (out / "table.md").write_text(markdown_table(rows, cfg.table))
-    plot_pareto(summary, out / "pareto.png", f"{cfg.name}: {cfg.size}x{cfg.size}, medians over {len(cfg.scenes)} scene(s)")
+    written = write_reports(cfg, out, rows)
     scaling_rows = run_scaling(cfg, renderer, log) if cfg.scaling else []
     if scaling_rows:
         write_csv(out / "scaling.csv", scaling_rows)
         plot_scaling(scaling_rows, out / "scaling.png")
     (out / "machine.md").write_text(machine_description(renderer, cfg, time.perf_counter() - start, commit))
     log((out / "suite.md").read_text())
-    log(f"wrote {out}/results.csv, suite.md, pareto.png, pareto.md, ratios.md, machine.md" + (", scaling.csv, scaling.png" if scaling_rows else "")
-        + (", table.md" if cfg.table else ""))
+    log(f"wrote {out}/results.csv, {', '.join(written)}, machine.md" + (", scaling.csv, scaling.png" if scaling_rows else ""))
     return rows
+
+
+def write_reports(cfg: BenchConfig, out: Path, rows: list[dict[str, Any]]) -> list[str]:
+    """Every report of ``rows`` (a run's, or its ``results.csv`` read back:
+    ``penumbra bench --report``) under ``out``; returns the files' names."""
+    main_rows = [r for r in rows if r["size"] == f"{cfg.size}x{cfg.size}"]
+    summary = aggregate(main_rows)
+    reports = {
+        "suite.md": suite_tables(rows) + "\n" + what_to_use(rows) + "\n" + MITSUBA_RULE[0].upper() + MITSUBA_RULE[1:] + ".\n",
+        "pareto.md": pareto_table(summary),
+        "ratios.md": ratio_tables(main_rows, summary),
+    }
+    if cfg.table:
+        reports["table.md"] = markdown_table(rows, cfg.table)
+    if cfg.time_to_error:
+        tte = cfg.time_to_error
+        reports["time_to_error.md"] = time_to_error_tables(main_rows, tte["errors"], tte.get("aggregate", "median"), tte.get("split", []))
+    for name, text in reports.items():
+        (out / name).write_text(text)
+    plot_pareto(summary, out / "pareto.png", f"{cfg.name}: {cfg.size}x{cfg.size}, medians over {len(cfg.scenes)} scene(s)")
+    return [*reports, "pareto.png"]
 
 
 def run_scaling(cfg: BenchConfig, renderer: Renderer, log: Callable[[str], None] = print) -> list[dict[str, Any]]:

@@ -258,7 +258,7 @@ pub fn scene_sphere_samples(center: DVec3, radius: f64, scene: &PreparedScene, n
 }
 
 /// The default `ray_offset` of the shadow-segment methods (`raytraced`,
-/// `triangle_masks`). `python benchmarks/point_light.py offsets` (point light
+/// `triangle_masks`). `penumbra bench --config benchmarks/ray_offsets.toml` (point light
 /// against CPU ray casting, `hard`'s bias scenes and five real meshes at
 /// 128x128): no acne from 1e-6 up, one pixel (of spot) at 1e-7, hundreds at
 /// 0; light leaks at 1e-3 (3 pixels of the bunny). The default keeps a
