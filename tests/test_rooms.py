@@ -13,7 +13,6 @@ difference's images under test-artifacts/rooms/.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -23,11 +22,8 @@ import pytest
 import penumbra
 from penumbra import rooms
 from stress_scenes import MESHES, check_images
-from test_projection import MAPPED, cheap, seam_scene
+from test_projection import MAPPED, cheap, seam_band, seam_scene
 from test_real_meshes import leave_images
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-from omnidirectional import seam_band  # noqa: E402
 
 SIZE = 32
 TRUTH = {"truth_samples": 256, "truth_map_size": 256}
