@@ -333,7 +333,7 @@ def test_rows_carry_their_own_noise_and_resolution_error(renderer: object, tmp_p
     (tmp_path / "c.toml").write_text(
         "scenes = ['sphere_on_plane']\nsize = 24\nground_truth_spp = 16\nradiance = false\nwarmup = 0\nrepeats = 1\n"
         "sampling_noise = true\nresolution_error = 2\ncolumns = ['test_bench:_pixel_columns']\n[methods]\npcss = [{ map_size = 256 }]\nhard = [{}, { map_size = 256 }]\n"
-        "[peers]\nmitsuba_spp = [4]\n[against.pcss]\nhard = { method = 'hard', keep = ['map_size'], threshold = 0.5 }\n"
+        "[peers]\nmitsuba_spp = [4]\n[against.pcss]\nhard = { method = 'hard', keep = ['map_size'], threshold = 0.1 }\n"
         "itself = {}\n[against.'*']\nfiner = { set = { map_size = 512 }, when = { map_size = 256 } }\nseed = { set = { seed = 1 } }\n"
     )
     rows = {(r["method"], r["label"]): r for r in bench.run(bench.load_config(tmp_path / "c.toml"), tmp_path, log=lambda _: None)}
