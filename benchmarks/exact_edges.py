@@ -57,7 +57,14 @@ def backprojection_edge(renderer: penumbra.Renderer) -> None:
     from test_backprojection import edge_scene, exact_edge_visibility
 
     print("\n| settings | levels | mean error per offset | mean of means | RMSE per offset |\n|---|---|---|---|---|")
-    for name, params in (("5.1 off", {"light_adaptive": False}), ("defaults", {}), ("t_k=4", {"t_k": 4.0})):
+    settings = (
+        ("5.1 off", {"light_adaptive": False}),
+        ("defaults", {}),
+        ("coarse_contour=centres (5.1's)", {"coarse_contour": "centres"}),
+        ("t_k=4", {"t_k": 4.0}),
+        ("t_k=4, centres", {"t_k": 4.0, "coarse_contour": "centres"}),
+    )
+    for name, params in settings:
         means, rmses, levels = [], [], set()
         for x in np.linspace(0.0, 0.032, 9)[:-1]:
             scene = edge_scene(0.3, edge_x=float(x))

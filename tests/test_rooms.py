@@ -153,7 +153,11 @@ SLOW = [
     ("wedges", {}, None),
     ("reference", {}, None),
     ("adaptive", {}, "adaptive moves 2.3% of pixels under the rotation (room under_shelf)"),
-    ("backprojection", {}, "backprojection moves 5.0% of pixels under the rotation (room under_shelf: its contour hierarchy is per cube face)"),
+    # Off the truth by 1.4% at worst, moved 1.2% (room under_shelf); with
+    # 5.1's contours (coarse_contour="centres") moved 5.0%: a coarse level's
+    # contour half a texel off along the shelf's edge, which runs along the
+    # texel grid unless the room is turned.
+    ("backprojection", {}, None),
     (
         "pvmf",
         {},

@@ -26,7 +26,8 @@ struct Backprojection {
     s_min: f32,
     // Camera eye xyz; w: eta of Eq. 5, pixels per world unit at unit view depth.
     eye: vec4<f32>,
-    // Bit 0: light-space multi-resolution (5.1); bit 1: screen-space (5.2).
+    // Bit 0: light-space multi-resolution (5.1); bit 1: screen-space (5.2);
+    // bit 2: coarse contours' crossings refined on level 0.
     flags: u32,
     // Levels of the hierarchy, level 0 (the map) included.
     levels: u32,
@@ -49,6 +50,9 @@ var<private> bp: Backprojection;
 
 const LIGHT_ADAPTIVE: u32 = 1u;
 const SCREEN_ADAPTIVE: u32 = 2u;
+const REFINED_CONTOUR: u32 = 4u;
+// Bisection steps of a refined crossing (see `side_crossing`).
+const REFINE_STEPS: u32 = 3u;
 // Eq. 1 gives the kernel to first order in the angle between the light's
 // rays; this covers the second-order rest on the widest cube-face kernels.
 const KERNEL_SLACK: f32 = 1.05;
@@ -453,6 +457,9 @@ struct Block {
     z: array<f32, 4>,
     // Bit k: sample k occludes.
     mask: u32,
+    // A level above 0 (its samples' depths are their footprints' minima), and the level.
+    coarse: bool,
+    level: u32,
 };
 
 // What a block adds: the area terms of its edges, their number, and whether
@@ -470,18 +477,72 @@ fn crossing(blk: Block, a: u32, b: u32, f: f32) -> vec2<f32> {
     return blk.c[a] + f * (blk.c[b] - blk.c[a]);
 }
 
+// Depth of level 0 at map point p (its texel; beyond a cube face, the
+// neighbour face's), along the receiver layer's axis.
+fn depth0(r: BpReceiver, p: vec2<f32>) -> f32 {
+    return map_bounds(r.layer, level_info(0u), vec2<i32>(floor(p)), false).x;
+}
+
+// Where the contour crosses the side from occluder sample a towards
+// background sample b, and the depth there. 5.1 (`coarse_contour`
+// "centres"): the crossing of `crossing` (t = 1 on coarse levels: a's
+// centre) at a's footprint's minimum depth. That places a contour up to
+// half a coarse texel from the map's, the same way along a whole edge that
+// runs along the texel grid (an axis-aligned shelf above a cube's light),
+// and a surface steep in the map nearer the light than it is at the contour.
+// "refined" (beyond the paper): the crossing found on level 0 by bisection
+// along the line through a's and b's centres, to 1/32 of a's texel, at the
+// depth of the last occluding texel. Where a's centre does not occlude on
+// level 0 (the footprint's occluder lies off it), 5.1's.
+fn side_crossing(r: BpReceiver, blk: Block, a: u32, b: u32, f: f32) -> vec3<f32> {
+    let paper = vec3<f32>(crossing(blk, a, b, f), blk.z[a]);
+    if (!blk.coarse || (bp.flags & REFINED_CONTOUR) == 0u) {
+        return paper;
+    }
+    let ca = blk.c[a];
+    let cb = blk.c[b];
+    // Fractions of the way from a's centre to b's: the map's contour crosses
+    // the line after a's centre (0) where that occludes on level 0, and
+    // before the samples' common border (1/2: b's footprint is free). The
+    // crossing stays in the block's cell: the centre test of 4.2 reads the
+    // cell around p' alone. (An occluder beyond a's centre from b would
+    // move it out, into the cell of blocks that hold no edge.)
+    var lo = 0.0;
+    var hi = 0.5;
+    var z = depth0(r, ca);
+    if (!occludes(r, ca, 0.0, z)) {
+        return paper;
+    }
+    // REFINE_STEPS halvings leave the crossing within 1/2^(steps+2) of a's
+    // texel (or half a texel of level 0, below level REFINE_STEPS).
+    for (var k = 0u; k < min(blk.level, REFINE_STEPS); k++) {
+        let mid = 0.5 * (lo + hi);
+        let p = mix(ca, cb, mid);
+        let zm = depth0(r, p);
+        if (occludes(r, p, 0.0, zm)) {
+            lo = mid;
+            z = zm;
+        } else {
+            hi = mid;
+        }
+    }
+    return vec3<f32>(mix(ca, cb, 0.5 * (lo + hi)), max(z, blk.z[a]));
+}
+
 fn add_edge(r: BpReceiver, res: ptr<function, BlockResult>, blk: Block, f: f32, a0: u32, b0: u32, a1: u32, b1: u32, probe: vec2<f32>, test: bool) {
     // The edge runs from the crossing of side (a0, b0) to that of (a1, b1);
     // its ends take the depths of their occluder samples, a0 and a1.
-    let ca = crossing(blk, a0, b0, f);
-    let cb = crossing(blk, a1, b1, f);
+    let pa = side_crossing(r, blk, a0, b0, f);
+    let pb = side_crossing(r, blk, a1, b1, f);
+    let ca = pa.xy;
+    let cb = pb.xy;
     let e = cb - ca;
     if (dot(e, e) < 1e-12) {
         // t = 1 shrinks a lone occluder to its centre: no edge.
         return;
     }
     (*res).edges += 1u;
-    (*res).area += edge_term(r, ca, blk.z[a0], cb, blk.z[a1]);
+    (*res).area += edge_term(r, ca, pa.z, cb, pb.z);
     if (test && cross2(e, probe - ca) > 0.0) {
         (*res).inside = true;
     }
@@ -629,6 +690,8 @@ fn centre_inside(r: BpReceiver, level: u32) -> bool {
     let s2 = read_sample(r, li, centre + vec2<i32>(1, 1));
     let s3 = read_sample(r, li, centre + vec2<i32>(0, 1));
     var blk: Block;
+    blk.coarse = level > 0u;
+    blk.level = level;
     blk.mask = u32(s0.occ) | (u32(s1.occ) << 1u) | (u32(s2.occ) << 2u) | (u32(s3.occ) << 3u);
     if (blk.mask == 0u || blk.mask == 15u) {
         return blk.mask == 15u;
@@ -700,6 +763,8 @@ fn visibility(r: BpReceiver, level: u32, h0: f32) -> Visibility {
                         let s1 = read_sample(r, li, vec2<i32>(i + 1, j));
                         let s2 = read_sample(r, li, vec2<i32>(i + 1, j + 1));
                         var blk: Block;
+                        blk.coarse = level > 0u;
+                        blk.level = level;
                         blk.mask = u32(s0.occ) | (u32(s1.occ) << 1u) | (u32(s2.occ) << 2u) | (u32(s3.occ) << 3u);
                         let test = i == centre.x && j == centre.y;
                         if (blk.mask != 0u && (blk.mask != 15u || test)) {

@@ -76,6 +76,9 @@ pub struct BackprojectionParams {
     pub light_adaptive: bool,
     /// 5.2 on.
     pub screen_adaptive: bool,
+    /// Coarse levels' contour crossings found on level 0 (true), or 5.1's
+    /// (t = 1: the occluders' centres, at their footprints' minimum depth).
+    pub refined_contour: bool,
 }
 
 crate::gpu_type! {
@@ -237,6 +240,12 @@ impl Method for SoftShadowBackprojection {
             ParamSpec::float_above("s_min", 16.0, 0.0, 1024.0, "5.2 (Eq. 6): screen penumbra width, pixels, from which penumbra pixels are skipped"),
             ParamSpec::bool("light_adaptive", true, "light-space multi-resolution (5.1); off: level 0 only"),
             ParamSpec::bool("screen_adaptive", true, "screen-space multi-resolution with pull-push reconstruction (5.2)"),
+            ParamSpec::choice(
+                "coarse_contour",
+                "refined",
+                &["centres", "refined"],
+                "contours on coarse levels (5.1): refined (beyond the paper: each crossing of a sample side found on the map by bisection, at the depth found there), centres (the paper's: shrunk onto the occluding samples' centres, t = 1, at their footprints' minimum depths)",
+            ),
         ]);
         specs
     }
@@ -250,6 +259,7 @@ impl Method for SoftShadowBackprojection {
             s_min: p.float("s_min") as f32,
             light_adaptive: p.bool("light_adaptive"),
             screen_adaptive: p.bool("screen_adaptive"),
+            refined_contour: p.choice("coarse_contour") == "refined",
         })
     }
 
@@ -469,7 +479,7 @@ impl SoftShadowBackprojection {
             beta: params.beta,
             s_min: params.s_min,
             eye: [camera.eye[0], camera.eye[1], camera.eye[2], eta],
-            flags: u32::from(params.light_adaptive) | (u32::from(params.screen_adaptive) << 1),
+            flags: u32::from(params.light_adaptive) | (u32::from(params.screen_adaptive) << 1) | (u32::from(params.refined_contour) << 2),
             levels,
             max_kernel,
             pad: 0,
