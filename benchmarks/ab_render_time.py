@@ -29,6 +29,24 @@ import time
 PARAMS: dict[str, dict] = {"reference": {"n_samples": 16}, "raytraced": {"n_samples": 16}, "triangle_masks": {"n_samples": 16}}
 
 
+def median_ms(renderer, scene, method: str, params: dict, repeats: int) -> float | None:
+    """The median wall time in ms of `repeats` renders after a first one, or
+    None (said on stderr) where the method refuses the render."""
+    import penumbra
+
+    try:
+        renderer.render(scene, method, **params)
+    except penumbra.PenumbraError as e:
+        print(f"{method} {params} {scene.camera.width}px: {e}", file=sys.stderr)
+        return None
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        renderer.render(scene, method, **params)
+        times.append(time.perf_counter() - t)
+    return 1e3 * statistics.median(times)
+
+
 def worker(sizes: list[int], repeats: int) -> dict[str, float]:
     import penumbra
 
@@ -38,31 +56,16 @@ def worker(sizes: list[int], repeats: int) -> dict[str, float]:
         scene = penumbra.scenes.get("sphere_on_plane", width=size, height=size)
         for method in penumbra.methods():  # the registry of the build under test
             params = PARAMS.get(method, {})
-            try:
-                renderer.render(scene, method, **params)
-            except penumbra.PenumbraError as e:  # e.g. a method that refuses this size
-                print(f"{method} {size}px: {e}", file=sys.stderr)
+            ms = median_ms(renderer, scene, method, params, repeats)
+            if ms is None:  # e.g. a method that refuses this size
                 continue
-            times = []
-            for _ in range(repeats):
-                t = time.perf_counter()
-                renderer.render(scene, method, **params)
-                times.append(time.perf_counter() - t)
-            out[f"{method} {size}px ms"] = 1e3 * statistics.median(times)
+            out[f"{method} {size}px ms"] = ms
             if "map_size" in penumbra.method_info(method).defaults() and penumbra.method_info(method).param("map_size").choices:
                 # A build with map_size="auto" (issue 24): the same, sized to the image.
-                auto = {**params, "map_size": "auto"}
-                try:
-                    renderer.render(scene, method, **auto)
-                except penumbra.PenumbraError as e:  # adaptive's grid of 4096-texel maps is refused
-                    print(f"{method} auto {size}px: {e}", file=sys.stderr)
+                ms = median_ms(renderer, scene, method, {**params, "map_size": "auto"}, repeats)
+                if ms is None:  # adaptive's grid of 4096-texel maps is refused
                     continue
-                times = []
-                for _ in range(repeats):
-                    t = time.perf_counter()
-                    renderer.render(scene, method, **auto)
-                    times.append(time.perf_counter() - t)
-                out[f"{method} map_size=auto {size}px ms"] = 1e3 * statistics.median(times)
+                out[f"{method} map_size=auto {size}px ms"] = ms
     cached = penumbra.Renderer(timing="cpu")
     scene = penumbra.scenes.get("sphere_on_plane", width=64, height=64)
     sweep = [("pvmf", {"n_blur": n}) for n in range(0, 24, 2)]

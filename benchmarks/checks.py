@@ -6,7 +6,8 @@
 3. Mitsuba's radiance from small sphere lights, exported as spheres, against
    Penumbra's exact irradiance (why small lights are exported as points).
 
-The scenes are those of tests/test_ground_truth.py.
+The scenes are those of tests/test_ground_truth.py (`penumbra.scenes.lit_plane`,
+`sphere_over_plane`).
 
     python benchmarks/checks.py
 """
@@ -18,15 +19,11 @@ import numpy as np
 import penumbra
 from penumbra import metrics
 from penumbra import mitsuba as pm
-from penumbra.analytic import cap_overlap, plane_hits
-from penumbra.scenes import ground_plane, sphere
+from penumbra.analytic import sphere_over_plane_visibility
 
 
 def unshadowed_radiance(renderer: penumbra.Renderer) -> None:
-    light = penumbra.SphereLight((0.7, 3.0, -0.4), 0.5, radiance=(40.0, 25.0, 10.0))
-    camera = penumbra.Camera(eye=(1.0, 4.0, 6.0), target=(0.0, 0.0, -0.5), fov_y=50, width=80, height=60)
-    plane = ground_plane()
-    scene = penumbra.Scene([penumbra.Mesh(plane.vertices, plane.faces, albedo=(0.8, 0.6, 0.4))], light, camera)
+    scene = penumbra.scenes.lit_plane()
     result = renderer.render(scene)
     gt = pm.ground_truth(scene, spp=64, kinds=["radiance"], cache=False)
     keep = ~metrics.silhouette_band(result.object_id)
@@ -35,19 +32,9 @@ def unshadowed_radiance(renderer: penumbra.Renderer) -> None:
 
 
 def estimator_against_closed_form() -> None:
-    center, radius = np.array([0.2, 1.5, 0.0]), 0.8
-    light = penumbra.SphereLight((0.0, 4.5, 0.3), 0.7, intensity=30.0)
-    camera = penumbra.Camera(eye=(0.0, 6.0, 4.0), target=(0.0, 0.0, 0.0), fov_y=50, width=96, height=96)
-    scene = penumbra.Scene([ground_plane(), sphere(tuple(center), radius, subdivisions=6)], light, camera)
+    scene = penumbra.scenes.sphere_over_plane()
     gt = pm.ground_truth(scene, spp=256, seed=3, noise_seed=4, kinds=["visibility"], cache=False)
-    p = plane_hits(camera)
-    on_plane = np.isfinite(p[..., 0]) & (np.abs(p[..., 0]) < 4.9) & (np.abs(p[..., 2]) < 4.9)
-    to_light, to_occluder = np.asarray(light.center, float) - p, center - p
-    dl, do = np.linalg.norm(to_light, axis=-1), np.linalg.norm(to_occluder, axis=-1)
-    a_light, a_occ = np.arcsin(light.radius / dl), np.arcsin(np.clip(radius / do, 0, 1))
-    g = np.arccos(np.clip((to_light * to_occluder).sum(-1) / (dl * do), -1, 1))
-    closed = 1 - cap_overlap(a_light, a_occ, g) / (2 * np.pi * (1 - np.cos(a_light)))
-    seen = on_plane & (np.abs(gt.images["hit_distance"] - np.linalg.norm(p - np.asarray(camera.eye), axis=-1)) < 1e-3)
+    closed, seen = sphere_over_plane_visibility(scene, gt.images["hit_distance"])
     region = seen & metrics.penumbra_region(closed)
     error = metrics.rmse(gt.visibility, closed, region)
     assert gt.second is not None

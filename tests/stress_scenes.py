@@ -37,6 +37,16 @@ NOT_YET = next((m for m in penumbra.methods(implemented_only=False) if m not in 
 MESHES = Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes"
 
 
+def seeded_renders(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str, **params: Any) -> tuple[penumbra.RenderResult, penumbra.RenderResult]:
+    """`method`'s renders of `scene` with seed 3 and with seed 4, after
+    checking that the seed fixes the image (a second render with seed 3 is
+    identical to the first)."""
+    a = renderer.render(scene, method, seed=3, **params)
+    b = renderer.render(scene, method, seed=3, **params)
+    np.testing.assert_array_equal(a.visibility, b.visibility)
+    return a, renderer.render(scene, method, seed=4, **params)
+
+
 def new_renderer(**options: Any) -> penumbra.Renderer:
     """A renderer with `options`, or the test skipped, with the reason, on a
     machine without a GPU adapter."""

@@ -16,9 +16,9 @@ import pytest
 import penumbra
 from penumbra import metrics
 from penumbra.raycast import outline_band
-from penumbra.scenes import box, ground_plane, sphere
+from penumbra.scenes import box, sphere
 
-from penumbra.analytic import cap_overlap, plane_hits
+from penumbra.analytic import cap_overlap, sphere_over_plane_visibility
 
 mitsuba = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed")
 from penumbra import mitsuba as pm  # noqa: E402
@@ -36,10 +36,7 @@ def test_variant_is_llvm_where_a_usable_llvm_exists() -> None:
 
 
 def test_unshadowed_radiance_matches_within_half_a_percent(renderer: penumbra.Renderer, cache: Path) -> None:
-    light = penumbra.SphereLight((0.7, 3.0, -0.4), 0.5, radiance=(40.0, 25.0, 10.0))
-    camera = penumbra.Camera(eye=(1.0, 4.0, 6.0), target=(0.0, 0.0, -0.5), fov_y=50, width=80, height=60)
-    plane = ground_plane()
-    scene = penumbra.Scene([penumbra.Mesh(plane.vertices, plane.faces, albedo=(0.8, 0.6, 0.4))], light, camera)
+    scene = penumbra.scenes.lit_plane()
     result = renderer.render(scene)
     gt = pm.ground_truth(scene, spp=64, kinds=["radiance"], cache_dir=cache)
     keep = ~metrics.silhouette_band(result.object_id)
@@ -111,25 +108,10 @@ def test_cap_overlap_formula_matches_sampling() -> None:
 def test_visibility_estimator_matches_the_closed_form(cache: Path) -> None:
     # A sphere occluder over a plane: the visible fraction of the light from a
     # plane point is 1 - overlap(light cone, occluder cone) / light cone.
-    center, radius = np.array([0.2, 1.5, 0.0]), 0.8
-    light = penumbra.SphereLight((0.0, 4.5, 0.3), 0.7, intensity=30.0)
-    camera = penumbra.Camera(eye=(0.0, 6.0, 4.0), target=(0.0, 0.0, 0.0), fov_y=50, width=96, height=96)
-    scene = penumbra.Scene([ground_plane(), sphere(tuple(center), radius, subdivisions=6)], light, camera)
+    scene = penumbra.scenes.sphere_over_plane()
     gt = pm.ground_truth(scene, spp=256, seed=3, noise_seed=4, kinds=["visibility"], cache_dir=cache)
-
-    p = plane_hits(camera)
-    on_plane = np.isfinite(p[..., 0]) & (np.abs(p[..., 0]) < 4.9) & (np.abs(p[..., 2]) < 4.9)
-    to_light = np.asarray(light.center, float) - p
-    to_occluder = center - p
-    dl = np.linalg.norm(to_light, axis=-1)
-    do = np.linalg.norm(to_occluder, axis=-1)
-    a_light = np.arcsin(light.radius / dl)
-    a_occ = np.arcsin(np.clip(radius / do, 0, 1))
-    g = np.arccos(np.clip((to_light * to_occluder).sum(-1) / (dl * do), -1, 1))
-    closed = 1 - cap_overlap(a_light, a_occ, g) / (2 * np.pi * (1 - np.cos(a_light)))
-
-    # Plane pixels not hidden from the camera by the sphere.
-    seen = on_plane & (np.abs(gt.images["hit_distance"] - np.linalg.norm(p - np.asarray(camera.eye), axis=-1)) < 1e-3)
+    # Plane pixels not hidden from the camera by the sphere, and the closed form there.
+    closed, seen = sphere_over_plane_visibility(scene, gt.images["hit_distance"])
     region = seen & metrics.penumbra_region(closed)
     assert region.sum() > 300, "the penumbra is in view"
     error = metrics.rmse(gt.visibility, closed, region)

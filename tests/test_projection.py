@@ -42,6 +42,19 @@ def cheap(method: str) -> dict:
     return {**FAST[method], **({"open_edges": "silhouette"} if method in VOLUME_METHODS else {})}
 
 
+def seam_renders(renderer: penumbra.Renderer, method: str, map_size: int) -> tuple[penumbra.Scene, dict, penumbra.RenderResult, penumbra.RenderResult]:
+    """`seam_scene` by `method` (`cheap`, at `map_size`; reference with 64
+    samples) over the fitted frustum and over cube faces: the scene, the
+    parameters, and the two renders."""
+    scene = seam_scene()
+    params = {**cheap(method), "map_size": map_size}
+    if method == "reference":
+        params["n_samples"] = 64
+    frustum = renderer.render(scene, method, projection="frustum", **params)
+    cube = renderer.render(scene, method, projection="cube", **params)
+    return scene, params, frustum, cube
+
+
 # The methods that render shadow maps (take `projection`); raytraced traces rays.
 MAPPED = [m for m in penumbra.methods() if "projection" in penumbra.method_info(m).defaults()]
 
@@ -100,12 +113,7 @@ def test_seams_are_invisible(renderer: penumbra.Renderer, method: str) -> None:
     """Along the cube's face boundaries (within 8 texels) the shadow is the
     frustum's: measured mean difference 0 for hard and pvm, 0.0016 for
     reference (64 samples)."""
-    scene = seam_scene()
-    params = {**cheap(method), "map_size": 512}
-    if method == "reference":
-        params["n_samples"] = 64
-    frustum = renderer.render(scene, method, projection="frustum", **params)
-    cube = renderer.render(scene, method, projection="cube", **params)
+    scene, _, frustum, cube = seam_renders(renderer, method, 512)
     band = seam_band(cube, np.asarray(scene.light.center, dtype=np.float32), 512, texels=8)
     assert band.sum() > 50, "the seams cross the image"
     difference = np.abs(cube.visibility - frustum.visibility)[band]

@@ -23,7 +23,7 @@ import penumbra
 from penumbra import rooms
 from penumbra.comparison import RECOMMENDED
 from stress_scenes import MESHES, check_images
-from test_projection import MAPPED, cheap, seam_band, seam_scene
+from test_projection import MAPPED, seam_band, seam_renders
 from test_real_meshes import leave_images
 
 SIZE = 32
@@ -200,12 +200,7 @@ def test_seams_match_the_frustum_within_its_resolution_error(renderer: penumbra.
     resolution error there (its largest difference from a map four times
     finer), or, for methods that jitter their taps, their sampling noise
     (seed 0 against 1), whichever is larger, plus 0.05."""
-    scene = seam_scene()
-    params = {**cheap(method), "map_size": 256}
-    if method == "reference":
-        params["n_samples"] = 64
-    frustum = renderer.render(scene, method, projection="frustum", **params)
-    cube = renderer.render(scene, method, projection="cube", **params)
+    scene, params, frustum, cube = seam_renders(renderer, method, 256)
     finer = renderer.render(scene, method, projection="frustum", **{**params, "map_size": 1024})
     band = seam_band(cube, np.asarray(scene.light.center, dtype=np.float32), 256, texels=2)
     assert band.sum() > 20, "the seams cross the image"

@@ -57,6 +57,9 @@ __all__ = [
     "REAL_FORMS",
     "real_names",
     "expand_names",
+    "lit_plane",
+    "sphere_over_plane",
+    "SPHERE_OCCLUDER",
 ]
 
 DEFAULT = "sphere_on_plane"
@@ -105,6 +108,30 @@ def box(center: tuple[float, float, float], extents: tuple[float, float, float],
     transform = trimesh.transformations.rotation_matrix(math.radians(yaw_degrees), [0, 1, 0])
     transform[:3, 3] = center
     return Mesh(m.vertices, m.faces, albedo=albedo, object_id=object_id, transform=transform, name=name)
+
+
+def lit_plane() -> Scene:
+    """A coloured ground plane under a sphere light, nothing casting a shadow:
+    Mitsuba's radiance and Penumbra's agree there where both are exact (the
+    export checks of docs/ground_truth.md and tests/test_ground_truth.py)."""
+    light = SphereLight((0.7, 3.0, -0.4), 0.5, radiance=(40.0, 25.0, 10.0))
+    camera = Camera(eye=(1.0, 4.0, 6.0), target=(0.0, 0.0, -0.5), fov_y=50, width=80, height=60)
+    plane = ground_plane()
+    return Scene([Mesh(plane.vertices, plane.faces, albedo=(0.8, 0.6, 0.4))], light, camera)
+
+
+#: The occluder of `sphere_over_plane`: its centre and radius.
+SPHERE_OCCLUDER = ((0.2, 1.5, 0.0), 0.8)
+
+
+def sphere_over_plane() -> Scene:
+    """One sphere occluder (`SPHERE_OCCLUDER`) over the ground plane, whose
+    shadow has a closed form (`analytic.sphere_occluder_visibility`): the
+    check of the ground truth's visibility estimator (docs/ground_truth.md)."""
+    center, radius = SPHERE_OCCLUDER
+    light = SphereLight((0.0, 4.5, 0.3), 0.7, intensity=30.0)
+    camera = Camera(eye=(0.0, 6.0, 4.0), target=(0.0, 0.0, 0.0), fov_y=50, width=96, height=96)
+    return Scene([ground_plane(), sphere(center, radius, subdivisions=6)], light, camera)
 
 
 def _camera() -> Camera:

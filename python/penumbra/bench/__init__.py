@@ -51,21 +51,8 @@ from pathlib import Path
 from typing import Sequence
 
 from penumbra.bench.config import BenchConfig, SceneVariant, expand, label, load_config
-from penumbra.bench.report import (
-    ERROR,
-    Point,
-    aggregate,
-    markdown_table,
-    pareto_front,
-    pareto_table,
-    plot_pareto,
-    plot_scaling,
-    ratio_tables,
-    read_csv,
-    time_at_error,
-    time_to_error_tables,
-    write_csv,
-)
+from penumbra.bench import report
+from penumbra.bench.report import *  # noqa: F403 (the reports, re-exported: report.__all__)
 from penumbra.bench.runner import machine_description, make_renderer, run, run_scaling, write_reports
 from penumbra.errors import ParameterError
 
@@ -79,24 +66,12 @@ __all__ = [
     "run_scaling",
     "make_renderer",
     "machine_description",
-    "ERROR",
-    "Point",
-    "aggregate",
-    "pareto_front",
-    "time_at_error",
-    "pareto_table",
-    "ratio_tables",
-    "plot_pareto",
-    "plot_scaling",
-    "write_csv",
-    "read_csv",
-    "time_to_error_tables",
     "write_reports",
-    "markdown_table",
     "main",
     "build_parser",
     "run_from_args",
 ]
+__all__ += report.__all__
 
 
 def main(argv: Sequence[str] | None = None) -> int:

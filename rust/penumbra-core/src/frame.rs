@@ -25,7 +25,7 @@ use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
 use crate::light_frustum::{LightProjection, ProjectionMode};
 use crate::pass_cache::{Entry, PassCache, PassKey};
 use crate::scene::{Camera, PreparedScene, Scene};
-use crate::silhouettes::SilhouetteCache;
+use crate::silhouettes::{SilhouetteCache, SilhouetteStats};
 
 /// The sphere light, in the precisions the passes use.
 #[derive(Debug, Clone, Copy)]
@@ -400,6 +400,17 @@ impl<'r> Frame<'r> {
     /// Sets a stat (counts that explain the cost).
     pub fn stat(&mut self, name: &str, value: i64) {
         self.stats.insert(name.to_owned(), value);
+    }
+
+    /// The stats of the silhouettes a method's volumes or wedges were built
+    /// from ([`SilhouetteStats::named`]), and `silhouette_cache_hits`: the
+    /// meshes whose silhouettes came from the silhouette cache when this frame
+    /// built them (`fresh`), 0 when the pass cache held what they built.
+    pub fn silhouette_stats(&mut self, stats: &SilhouetteStats, cache_hits: usize, fresh: bool) {
+        for (name, value) in stats.named() {
+            self.stat(name, value);
+        }
+        self.stat("silhouette_cache_hits", if fresh { cache_hits as i64 } else { 0 });
     }
 
     /// Reads `buffer`'s first `names.len()` u32 counters back into the stats of those names.

@@ -25,12 +25,14 @@
 //! these shaders need, and this keeps the WGSL the GPU compiles the WGSL
 //! that is written.
 //!
-//! A file with an entry point (`@compute`, `@vertex`, `@fragment`) is a
-//! shader a pipeline is built from; `tests/shader_validation.rs` composes
-//! and validates each one with naga, checks that every file is used, and
-//! checks every Rust uniform and storage struct against naga's layout of its
-//! WGSL twin ([`GpuStruct`]: a module declares its own with [`gpu_type!`],
-//! and build.rs finds every declaration, as it finds the WGSL files).
+//! A file that no file imports, with an entry point (`@compute`, `@vertex`,
+//! `@fragment`) of its own or of a file it imports, is a shader a pipeline
+//! is built from ([`is_entry`]);
+//! `tests/shader_validation.rs` composes and validates each one with naga,
+//! checks that every file is used, and checks every Rust uniform and storage
+//! struct against naga's layout of its WGSL twin ([`GpuStruct`]: a module
+//! declares its own with [`gpu_type!`], and build.rs finds every
+//! declaration, as it finds the WGSL files).
 
 use std::collections::BTreeSet;
 
@@ -136,9 +138,14 @@ macro_rules! shader {
     };
 }
 
-/// Whether a file holds an entry point: a shader a pipeline is built from.
+/// Whether a file is a shader a pipeline is built from: no file imports it,
+/// and it or a file it imports holds an entry point. An imported file's
+/// entry points are its importers' (`shaders/per_pixel.wgsl`'s `main` runs
+/// the importing pass's `shade`), composed and validated within each of them.
 pub fn is_entry(path: &str) -> bool {
-    text(path).is_ok_and(|t| ["@compute", "@vertex", "@fragment"].iter().any(|e| t.contains(e)))
+    let imported = FILES.iter().any(|(p, _)| imports(p).is_ok_and(|i| i.contains(&path)));
+    let has_entry = |file: &&str| text(file).is_ok_and(|t| ["@compute", "@vertex", "@fragment"].iter().any(|e| t.contains(e)));
+    !imported && files_of(path).is_ok_and(|files| files.iter().any(has_entry))
 }
 
 /// Every shader a pipeline is built from, composed, with the files it is made of.

@@ -25,15 +25,22 @@ pub fn depth_texture(binding: u32) -> wgpu::BindGroupLayoutEntry {
     texture(binding, wgpu::TextureSampleType::Depth)
 }
 
+/// A write-only storage image (compute), `texture_storage_2d`.
 pub fn storage_texture(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    write_only_storage(binding, format, wgpu::TextureViewDimension::D2)
+}
+
+/// A write-only storage binding of a light-space array image (compute),
+/// `texture_storage_2d_array`.
+pub fn storage_array_texture(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    write_only_storage(binding, format, wgpu::TextureViewDimension::D2Array)
+}
+
+fn write_only_storage(binding: u32, format: wgpu::TextureFormat, view_dimension: wgpu::TextureViewDimension) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::WriteOnly,
-            format,
-            view_dimension: wgpu::TextureViewDimension::D2,
-        },
+        ty: wgpu::BindingType::StorageTexture { access: wgpu::StorageTextureAccess::WriteOnly, format, view_dimension },
         count: None,
     }
 }
@@ -89,7 +96,7 @@ pub fn uniform(binding: u32) -> wgpu::BindGroupLayoutEntry {
 /// without freeing the old machine code (about 0.16 MiB and an LLVM compile
 /// per dispatch; docs/stability.md, "Resident set"). Storage buffers are not
 /// inlined. Shaders that read parameters in loops (pcf, pcss, pvmf) copy
-/// them into `var<private>` once at the top of `main`: lavapipe gathers and
+/// them into `var<private>` once at the top of `shade`: lavapipe gathers and
 /// bounds-checks every storage load and does not hoist them, which made
 /// `pcss` 2.2-2.7 times `hard` at 256x256 until the copy, 1.6-1.8 after
 /// (`penumbra bench --config benchmarks/builtin.toml`; docs/stability.md).
@@ -199,19 +206,8 @@ pub fn compute_pipeline_entry(
 }
 
 /// Records a compute pass that runs `pipeline` once per pixel of a
-/// `width` x `height` image, in 8x8 workgroups.
-pub fn dispatch_per_pixel(
-    encoder: &mut wgpu::CommandEncoder,
-    label: &str,
-    pipeline: &wgpu::ComputePipeline,
-    bind_group: &wgpu::BindGroup,
-    (width, height): (u32, u32),
-    timestamps: Option<crate::gpu::PassTimestamps<'_>>,
-) {
-    dispatch_per_pixel_writes(encoder, label, pipeline, bind_group, (width, height), timestamps.map(|t| t.compute()));
-}
-
-/// [`dispatch_per_pixel`] with explicit timestamp writes (for parts of a named pass).
+/// `width` x `height` image, in 8x8 workgroups, with `timestamp_writes`
+/// (a whole pass's, or a part's of a named pass).
 pub fn dispatch_per_pixel_writes(
     encoder: &mut wgpu::CommandEncoder,
     label: &str,
@@ -226,23 +222,9 @@ pub fn dispatch_per_pixel_writes(
     pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
 }
 
-pub fn create_texture(
-    device: &wgpu::Device,
-    label: &str,
-    (width, height): (u32, u32),
-    format: wgpu::TextureFormat,
-    usage: wgpu::TextureUsages,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage,
-        view_formats: &[],
-    })
+/// A 2D texture: [`create_array_texture`] of one layer.
+pub fn create_texture(device: &wgpu::Device, label: &str, size: (u32, u32), format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> wgpu::Texture {
+    create_array_texture(device, label, size, 1, format, usage)
 }
 
 /// A 2D array texture of `layers` layers (shadow maps: 1 for a frustum, 6 for cube faces).

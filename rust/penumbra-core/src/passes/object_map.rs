@@ -18,9 +18,11 @@ use std::sync::Arc;
 
 use crate::error::Result;
 use crate::frame::{Frame, FrameContext};
-use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool};
+use crate::gpu::layout;
+use crate::gpu::pool::{Binding, PooledBuffer, PooledTexture, ResourcePool};
 use crate::light_frustum::LightProjection;
 use crate::pass_cache::{CachedPass, PassKey};
+use crate::passes::screen::LayoutEntry;
 use crate::passes::volumes::VolumePass;
 
 /// The object map and the per-mesh object table, as the pass cache keeps them.
@@ -59,10 +61,20 @@ pub struct ObjectMap {
     pub objects: PooledBuffer,
 }
 
-/// The two bindings a screen pass reads the map through: the map
-/// (`texture_2d_array<u32>`) and the per-mesh table (storage, read).
-pub fn map_binding(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    crate::gpu::layout::array_texture(binding, wgpu::TextureSampleType::Uint)
+/// `entries` followed by the two layout entries a screen pass reads the map
+/// through (`horizon_sliver_seen` of passes/shadow_test.wgsl), last among its
+/// bindings: the map (`texture_2d_array<u32>`) and the per-mesh table
+/// (storage, read). [`ObjectMap::after`] binds them.
+pub fn with_bindings(entries: &[LayoutEntry]) -> Vec<LayoutEntry> {
+    let map: LayoutEntry = |binding| layout::array_texture(binding, wgpu::TextureSampleType::Uint);
+    [entries, &[map, layout::parameters]].concat()
+}
+
+impl ObjectMap {
+    /// `resources` followed by the map and its table, for a layout made by [`with_bindings`].
+    pub fn after<'a>(&'a self, resources: &'a [Binding<'a>]) -> Vec<Binding<'a>> {
+        resources.iter().map(Binding::reborrow).chain([Binding::Texture(&self.map), Binding::Buffer(&self.objects)]).collect()
+    }
 }
 
 /// The map when `needed` (the `horizon` repair), or a 1-texel stand-in that

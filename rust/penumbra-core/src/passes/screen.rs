@@ -3,6 +3,8 @@
 //! bindings 0 and 1 (declared once, in `shaders/receiver.wgsl`) and its own
 //! resources after them, in order; bind groups come from the resource pool,
 //! so a render that binds the same resources as an earlier one makes none.
+//! A pass that works pixel by pixel imports `shaders/per_pixel.wgsl`, whose
+//! `main` runs the pass's `shade` for each pixel inside the image.
 
 use crate::frame::FrameContext;
 use crate::gpu::layout;

@@ -1,4 +1,5 @@
 #import shaders/receiver.wgsl
+#import shaders/per_pixel.wgsl
 
 // Shading of SPEC section 3, shared by every method:
 //   radiance = albedo / pi * E(p) * v(p) + albedo * ambient
@@ -55,12 +56,8 @@ fn sphere_light_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return shading.intensity.rgb * factor / max(d2, 1e-30);
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     let px = pixel.px;
     var radiance = vec3<f32>(0.0);
     if (pixel.geometry) {

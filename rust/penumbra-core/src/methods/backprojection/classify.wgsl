@@ -1,4 +1,5 @@
 #import methods/backprojection/contour.wgsl
+#import shaders/per_pixel.wgsl
 
 // Method `backprojection`, pass 1 of its v-buffer (section 6): per camera
 // pixel, the kernel of Eq. 1 refined through the local minimum of the
@@ -311,13 +312,9 @@ fn select_pixel(r: BpReceiver, c_in: Classified, px: vec2<i32>, p: vec3<f32>, n:
     return c;
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     load_params();
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
     let px = pixel.px;
     var c = Classified(BACKGROUND, 0.0, 0.0, -1.0, 0.0);
     if (pixel.geometry) {

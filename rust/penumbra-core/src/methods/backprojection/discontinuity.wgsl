@@ -1,4 +1,5 @@
 #import shaders/receiver.wgsl
+#import shaders/per_pixel.wgsl
 
 // Method `backprojection`, 5.2: the screen-space discontinuity buffer. Step
 // 0 marks pixels at a discontinuity of the receivers: another mesh or the
@@ -55,12 +56,8 @@ fn detect(pixel: ScreenPixel) -> bool {
     return max(abs(dx), abs(dy)) > DEPTH_CURVATURE * centre;
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     let px = pixel.px;
     var line = 0.0;
     let s = step;

@@ -293,7 +293,7 @@ impl Method for SoftShadowBackprojection {
             pool,
             "backprojection::classify_pass",
             crate::shader!("classify.wgsl"),
-            &[
+            &object_map::with_bindings(&[
                 layout::depth_array,
                 layout::storage_buffer,
                 layout::parameters,
@@ -305,9 +305,7 @@ impl Method for SoftShadowBackprojection {
                 storage,
                 layout::storage_buffer_rw,
                 layout::storage_buffer_rw,
-                object_map::map_binding,
-                layout::parameters,
-            ],
+            ]),
             &["main"],
         );
         let visibility = ScreenPass::new(
@@ -410,10 +408,8 @@ impl Method for SoftShadowBackprojection {
                 Binding::Texture(&level),
                 Binding::Buffer(&list),
                 Binding::Buffer(&counters),
-                Binding::Texture(&objects.map),
-                Binding::Buffer(&objects.objects),
             ];
-            let bind_group = self.classify.bind_group(ctx, &resources);
+            let bind_group = self.classify.bind_group(ctx, &objects.after(&resources));
             self.classify.dispatch(ctx, encoder, "main", &bind_group, ts.and_then(|t| t.compute_part(first, true)));
             (counters, test, bp)
         })?;

@@ -1,5 +1,6 @@
 #import shaders/receiver.wgsl
 #import passes/shadow_test.wgsl
+#import shaders/per_pixel.wgsl
 
 // Method `hard`: the shadow-map test from the light centre (Williams 1978),
 // visibility 0 or 1; the test and its bias schemes are in passes/shadow_test.wgsl.
@@ -8,12 +9,8 @@
 @group(0) @binding(3) var<storage, read> hard: ShadowTest;
 @group(0) @binding(4) var visibility_out: texture_storage_2d<r32float, write>;
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     var v = 0.0;
     if (pixel.geometry) {
         v = shadow_test_visibility(hard, shadow_map, pixel.p, pixel.n);

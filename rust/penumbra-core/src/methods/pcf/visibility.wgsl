@@ -1,5 +1,6 @@
 #import shaders/receiver.wgsl
 #import passes/pcf_taps.wgsl
+#import shaders/per_pixel.wgsl
 
 // Method `pcf`: percentage-closer filtering with a fixed kernel (Reeves et
 // al. 1987; Cournia 3.4): the mean of the shadow-map tests over a square of
@@ -20,7 +21,7 @@ struct PcfKernel {
 @group(0) @binding(3) var cmp_sampler: sampler_comparison;
 @group(0) @binding(4) var<storage, read> shadow_params: ShadowTest;
 @group(0) @binding(5) var<storage, read> pcf_params: PcfKernel;
-// Per-invocation copies of the parameters, read once in `main` (as in pcss/visibility.wgsl).
+// Per-invocation copies of the parameters, read once in `shade` (as in pcss/visibility.wgsl).
 var<private> shadow: ShadowTest;
 var<private> pcf: PcfKernel;
 @group(0) @binding(6) var visibility_out: texture_storage_2d<r32float, write>;
@@ -48,17 +49,13 @@ fn pcf_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> f32 {
     return sum / f32(count);
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     shadow = shadow_params;
     pcf = pcf_params;
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
     var v = 0.0;
     if (pixel.geometry) {
-        v = pcf_visibility(id.xy, pixel.p, pixel.n);
+        v = pcf_visibility(vec2<u32>(pixel.px), pixel.p, pixel.n);
     }
     textureStore(visibility_out, pixel.px, vec4<f32>(v, 0.0, 0.0, 0.0));
 }

@@ -180,7 +180,7 @@ impl Method for PercentageCloserSoftShadows {
             pool,
             "pcss::visibility_pass",
             crate::shader!("visibility.wgsl"),
-            &[
+            &object_map::with_bindings(&[
                 layout::depth_array,
                 layout::comparison_sampler,
                 layout::parameters,
@@ -189,9 +189,7 @@ impl Method for PercentageCloserSoftShadows {
                 |b| layout::storage_texture(b, formats::VISIBILITY),
                 |b| layout::storage_texture(b, formats::VISIBILITY),
                 layout::storage_buffer_rw,
-                object_map::map_binding,
-                layout::parameters,
-            ],
+            ]),
             &["main"],
         );
         Self { visibility, object_pass: object_map::pass(device, pool) }
@@ -232,10 +230,8 @@ impl Method for PercentageCloserSoftShadows {
                 Binding::Texture(&penumbra_width),
                 Binding::Texture(&blocker_depth),
                 Binding::Buffer(&counters),
-                Binding::Texture(&objects.map),
-                Binding::Buffer(&objects.objects),
             ];
-            self.visibility.run(ctx, encoder, &resources, ts);
+            self.visibility.run(ctx, encoder, &objects.after(&resources), ts);
             counters
         })?;
         frame.counters(&counters, COUNTER_NAMES);

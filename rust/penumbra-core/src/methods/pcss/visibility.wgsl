@@ -1,5 +1,6 @@
 #import shaders/receiver.wgsl
 #import passes/pcf_taps.wgsl
+#import shaders/per_pixel.wgsl
 
 // Method `pcss`: percentage-closer soft shadows (Fernando 2005; surveyed in
 // Cournia ch. 3, and the basis of PVMF's filter, 5.2). Per pixel:
@@ -40,7 +41,7 @@ struct PcssPixel {
 // center.w: the light's radius.
 @group(0) @binding(4) var<storage, read> shadow_params: ShadowTest;
 @group(0) @binding(5) var<storage, read> pcss_params: PcssSampling;
-// Per-invocation copies of the parameters, read once in `main`: storage-buffer
+// Per-invocation copies of the parameters, read once in `shade`: storage-buffer
 // loads are not hoisted out of the tap loops on every driver (lavapipe
 // gathers and bounds-checks each one).
 var<private> shadow: ShadowTest;
@@ -265,19 +266,15 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssP
     return out;
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     shadow = shadow_params;
     pcss = pcss_params;
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
     let px = pixel.px;
     var o = PcssPixel(0.0, 0.0, 0.0);
     if (pixel.geometry) {
         let own = mesh_objects[min(u32(pixel.normal_texel.w), arrayLength(&mesh_objects) - 1u)];
-        o = pcss_visibility(id.xy, pixel.p, pixel.n, own);
+        o = pcss_visibility(vec2<u32>(pixel.px), pixel.p, pixel.n, own);
         // `horizon`: no more of the light than lies above the tangent plane.
         if (pcss.horizon == 1u && shadow.center.w > 0.0) {
             o.v = min(o.v, horizon_fraction(shadow, pixel.p, pixel.n));

@@ -101,20 +101,6 @@ pub struct PenumbraVolumeMaps {
     edge_maps_layout: Layout,
 }
 
-/// A write-only storage binding of a light-space array image (compute).
-fn storage_array(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::WriteOnly,
-            format,
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-        },
-        count: None,
-    }
-}
-
 /// A light-space image of edge indices (`texture_2d_array<u32>`).
 fn uint_array(binding: u32) -> wgpu::BindGroupLayoutEntry {
     layout::array_texture(binding, wgpu::TextureSampleType::Uint)
@@ -166,7 +152,7 @@ impl Method for PenumbraVolumeMaps {
             pool,
             "pvm::visibility_pass",
             crate::shader!("visibility.wgsl"),
-            &[
+            &object_map::with_bindings(&[
                 layout::depth_array,
                 layout::depth_array,
                 uint_array,
@@ -175,15 +161,13 @@ impl Method for PenumbraVolumeMaps {
                 |b| layout::storage_texture(b, formats::VISIBILITY),
                 |b| layout::storage_texture(b, formats::VISIBILITY),
                 layout::storage_buffer_rw,
-                object_map::map_binding,
-                layout::parameters,
-            ],
+            ]),
             &["main"],
         );
         let edge_maps_layout = pool.layout(
             device,
             "pvm::edge_maps_layout",
-            &[uint_array(0), layout::parameters(1), storage_array(2, EDGE_POINT_FORMAT), storage_array(3, EDGE_POINT_FORMAT)],
+            &[uint_array(0), layout::parameters(1), layout::storage_array_texture(2, EDGE_POINT_FORMAT), layout::storage_array_texture(3, EDGE_POINT_FORMAT)],
         );
         let edge_maps_pipeline =
             layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shader!("edge_maps.wgsl"), &edge_maps_layout);
@@ -221,20 +205,15 @@ impl Method for PenumbraVolumeMaps {
                 Binding::Texture(&visibility),
                 Binding::Texture(&membership),
                 Binding::Buffer(&counter),
-                Binding::Texture(&objects.map),
-                Binding::Buffer(&objects.objects),
             ];
-            self.visibility.run(ctx, encoder, &resources, ts);
+            self.visibility.run(ctx, encoder, &objects.after(&resources), ts);
             counter
         })?;
         let s = &volumes.stats;
-        for (name, value) in s.silhouette.named() {
-            frame.stat(name, value);
-        }
+        frame.silhouette_stats(&s.silhouette, volumes.silhouette_cache_hits, fresh);
         frame.stat("penumbra_volumes", s.volume_quads as i64);
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("extrusions_outside_light_cone", s.extrusions_outside_cone as i64);
-        frame.stat("silhouette_cache_hits", if fresh { volumes.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counter, &["pixels_in_volume"]);
         frame.intermediate(Intermediate::depth("pvm_volume_depth", &volumes.volume_depth, projection.far()));
         if frame.wants_intermediates() {

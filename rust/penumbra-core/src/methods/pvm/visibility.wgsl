@@ -1,5 +1,6 @@
 #import shaders/receiver.wgsl
 #import passes/shadow_test.wgsl
+#import shaders/per_pixel.wgsl
 
 // PVM pass 3 (Cournia 4.2, listing 4.2): light visibility per camera pixel.
 // Inside a penumbra volume (the PVDM is nearer the light than the pixel),
@@ -70,12 +71,8 @@ fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
 // two of the hard-shadow boundary they disagree by design.
 const CENTRE_TOLERANCE: f32 = 0.1;
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     let px = pixel.px;
     var v = 0.0;
     var inside = 0.0;

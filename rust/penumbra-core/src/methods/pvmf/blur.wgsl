@@ -1,4 +1,5 @@
 #import shaders/receiver.wgsl
+#import shaders/per_pixel.wgsl
 
 // PVMF passes 4 and 5 (Cournia 5.3, 5.5): one direction of the separable
 // blur of the visibility buffer,
@@ -19,18 +20,14 @@ struct BlurSettings {
     count: u32,
 };
 @group(0) @binding(4) var<storage, read> blur_params: BlurSettings;
-// Per-invocation copies of the parameters, read once in `main` (as in pcss/visibility.wgsl).
+// Per-invocation copies of the parameters, read once in `shade` (as in pcss/visibility.wgsl).
 var<private> blur: BlurSettings;
 @group(0) @binding(5) var destination: texture_storage_2d<r32float, write>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 3>;
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     blur = blur_params;
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
     let size = vec2<i32>(textureDimensions(gbuffer_normal));
     let u = pixel.px;
     var v = textureLoad(source, u, 0).x;

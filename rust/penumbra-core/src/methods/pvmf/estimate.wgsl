@@ -1,5 +1,6 @@
 #import shaders/receiver.wgsl
 #import passes/pcf_taps.wgsl
+#import shaders/per_pixel.wgsl
 
 // PVMF pass 3 (Cournia 5.2): visibility estimation per camera pixel. Pixels
 // inside a penumbra volume (the mask is nearer the light than the pixel) or
@@ -26,7 +27,7 @@ struct PvmfSettings {
     blur_min_width: f32,
 };
 @group(0) @binding(7) var<storage, read> settings_params: PvmfSettings;
-// Per-invocation copies of the parameters, read once in `main` (as in pcss/visibility.wgsl).
+// Per-invocation copies of the parameters, read once in `shade` (as in pcss/visibility.wgsl).
 var<private> pvmf: ShadowTest;
 var<private> settings: PvmfSettings;
 @group(0) @binding(8) var visibility_out: texture_storage_2d<r32float, write>;
@@ -92,14 +93,10 @@ fn filter_width(r: Receiver, p: vec3<f32>, d_o: f32) -> vec2<f32> {
     return min(w, vec2<f32>(pvmf.light_space.depth.z));
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     pvmf = pvmf_params;
     settings = settings_params;
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
     let px = pixel.px;
     var v = 0.0;
     var blur = 0.0;
@@ -133,7 +130,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 for (var i = 0u; i < n_pcf * n_pcf; i++) {
                     // An n_pcf x n_pcf grid of cells w_pcf / n_pcf square, one
                     // jittered tap per cell (5.2, Fig. 5.3).
-                    var s = grid_tap(i, n_pcf, jitter2(id.xy, settings.seed, i));
+                    var s = grid_tap(i, n_pcf, jitter2(vec2<u32>(pixel.px), settings.seed, i));
                     if ((settings.flags & 1u) != 0u) {
                         // The light's projection is a disk: the disk inscribed
                         // in the square, with the same strata.

@@ -258,7 +258,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             pool,
             "pvmf::estimate_pass",
             crate::shader!("estimate.wgsl"),
-            &[
+            &object_map::with_bindings(&[
                 layout::depth_array,
                 layout::depth_array,
                 layout::float_array,
@@ -269,9 +269,7 @@ impl Method for PenumbraVolumeMaskFiltering {
                 storage,
                 storage,
                 layout::storage_buffer_rw,
-                object_map::map_binding,
-                layout::parameters,
-            ],
+            ]),
             &["main"],
         );
         let blur = ScreenPass::new(
@@ -334,10 +332,8 @@ impl Method for PenumbraVolumeMaskFiltering {
                     Binding::Texture(&estimate.blur_mask),
                     Binding::Texture(&estimate.filter_width),
                     Binding::Buffer(&estimate.counters),
-                    Binding::Texture(&objects.map),
-                    Binding::Buffer(&objects.objects),
                 ];
-                self.estimate.run(ctx, encoder, &resources, ts);
+                self.estimate.run(ctx, encoder, &objects.after(&resources), ts);
             })?;
             Ok(Arc::new(estimate))
         })?;
@@ -357,11 +353,8 @@ impl Method for PenumbraVolumeMaskFiltering {
             estimate.raw.clone()
         };
         let s = &mask.stats;
-        for (name, value) in s.silhouette.named() {
-            frame.stat(name, value);
-        }
+        frame.silhouette_stats(&s.silhouette, mask.silhouette_cache_hits, fresh_mask);
         frame.stat("mask_quads", s.mask_quads as i64);
-        frame.stat("silhouette_cache_hits", if fresh_mask { mask.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counters, &COUNTERS);
         frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth, projection.far()));
         frame.intermediate(Intermediate::color("pvmf_edge_distance", &mask.edge_distance, 1));

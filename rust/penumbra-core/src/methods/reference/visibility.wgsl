@@ -1,18 +1,18 @@
 #import shaders/receiver.wgsl
 #import passes/shadow_test.wgsl
+#import shaders/accumulation.wgsl
 
 // Method `reference` (Herf 3.4 and 4.2; Schwarzler Eq. 1-2): visibility is
 // the weighted average of hard shadows from n points on the light.
 // `accumulate` adds one sample's shadow-map test and its weight to a
-// per-pixel accumulation buffer; `resolve` writes their ratio as visibility.
+// per-pixel accumulation buffer; `resolve` writes their ratio as visibility
+// (shaders/accumulation.wgsl).
 
 @group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 // The shadow test from one light sample; center.xyz = the sample, center.w =
 // its weight: 1/n (equal weights), or the inverse of its sampling density.
 @group(0) @binding(3) var<storage, read> sample_test: ShadowTest;
-// Per pixel: (sum of weight * visibility, sum of weights).
-@group(0) @binding(4) var<storage, read_write> accumulated: array<vec2<f32>>;
-@group(0) @binding(5) var visibility_out: texture_storage_2d<r32float, write>;
+// Bindings 4 and 5: the accumulation (shaders/accumulation.wgsl).
 
 struct SampleWeight {
     // The sphere's outward unit normal at the sample; w = 1: weight by solid angle, 0: equal weights.
@@ -53,19 +53,5 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     // Samples below the surface's horizon count as hidden (shadow_test_visibility).
     let v = shadow_test_visibility(sample_test, shadow_map, pixel.p, pixel.n);
-    let size = textureDimensions(gbuffer_normal);
-    accumulated[id.y * size.x + id.x] += vec2<f32>(w * v, w);
-}
-
-@compute @workgroup_size(8, 8)
-fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(gbuffer_normal);
-    if (id.x >= size.x || id.y >= size.y) {
-        return;
-    }
-    let a = accumulated[id.y * size.x + id.x];
-    // No sample faces the pixel (only possible with very few samples): the
-    // sphere is treated as hidden rather than dividing by zero.
-    let v = select(0.0, clamp(a.x / a.y, 0.0, 1.0), a.y > 0.0);
-    textureStore(visibility_out, vec2<i32>(id.xy), vec4<f32>(v, 0.0, 0.0, 0.0));
+    accumulate_sample(id, w, v);
 }

@@ -217,7 +217,7 @@ impl Method for PenumbraWedges {
             pool,
             "wedges::visibility_pass",
             crate::shader!("visibility.wgsl"),
-            &[
+            &object_map::with_bindings(&[
                 layout::depth_array,
                 layout::parameters,
                 layout::storage_buffer,
@@ -228,9 +228,7 @@ impl Method for PenumbraWedges {
                 |b| layout::storage_texture(b, formats::VISIBILITY),
                 |b| layout::storage_texture(b, formats::VISIBILITY),
                 layout::storage_buffer_rw,
-                object_map::map_binding,
-                layout::parameters,
-            ],
+            ]),
             &["main"],
         );
         Self { visibility, object_pass: object_map::pass(device, pool) }
@@ -277,23 +275,18 @@ impl Method for PenumbraWedges {
                 Binding::Texture(&hard),
                 Binding::Texture(&intensity),
                 Binding::Buffer(&counter),
-                Binding::Texture(&objects.map),
-                Binding::Buffer(&objects.objects),
             ];
-            self.visibility.run(ctx, encoder, &resources, ts);
+            self.visibility.run(ctx, encoder, &objects.after(&resources), ts);
             counter
         })?;
         let s = &wedges.stats;
-        for (name, value) in s.silhouette.named() {
-            frame.stat(name, value);
-        }
+        frame.silhouette_stats(&s.silhouette, wedges.silhouette_cache_hits, fresh);
         frame.stat("wedges", s.wedges as i64);
         frame.stat("extra_wedges", s.extra_wedges as i64);
         frame.stat("culled_wedges", s.culled_wedges as i64);
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("side_line_fallbacks", s.side_fallbacks as i64);
         frame.stat("binned_wedge_tiles", s.binned as i64);
-        frame.stat("silhouette_cache_hits", if fresh { wedges.silhouette_cache_hits as i64 } else { 0 });
         frame.counters(&counter, &["pixels_in_wedge"]);
         frame.intermediate(Intermediate::color("wedges_hard", &hard, 1));
         frame.intermediate(Intermediate::color("wedges_intensity", &intensity, 1));

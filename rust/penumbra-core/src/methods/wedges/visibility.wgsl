@@ -1,5 +1,6 @@
 #import shaders/receiver.wgsl
 #import passes/shadow_test.wgsl
+#import shaders/per_pixel.wgsl
 
 // Method `wedges` (Akenine-Möller & Assarsson 2002): light intensity per
 // camera pixel. The hard shadow from the light centre (the shadow map of
@@ -224,12 +225,8 @@ fn fold_object(o: Objects, s: f32) -> Objects {
     return out;
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pixel = screen_pixel(id);
-    if (!pixel.inside) {
-        return;
-    }
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+fn shade(pixel: ScreenPixel) {
     let px = pixel.px;
     var v = 0.0;
     var hard = 0.0;
