@@ -8,7 +8,7 @@
 
 use glam::{DVec2, DVec3};
 
-use crate::scene::PreparedScene;
+use crate::scene::{Camera, PreparedScene};
 
 /// Where the samples lie: jittered in their strata (fixed by a seed), or
 /// on the regular grid through the square's corners.
@@ -101,14 +101,14 @@ pub struct LightSample {
 }
 
 /// Stratified jittered points on the disk of `radius` around `center`
-/// perpendicular to `axis` (a unit vector towards the scene). A radius of 0
-/// gives the centre once.
-pub fn light_samples(center: DVec3, radius: f64, axis: DVec3, n: u32, strata: impl Into<Strata>) -> Vec<DVec3> {
+/// spanned by the unit vectors `basis` (perpendicular to the axis towards
+/// the scene: [`camera_basis`], or any frame where nothing turns). A radius
+/// of 0 gives the centre once.
+pub fn light_samples(center: DVec3, radius: f64, basis: (DVec3, DVec3), n: u32, strata: impl Into<Strata>) -> Vec<DVec3> {
     if radius == 0.0 {
         return vec![center];
     }
-    let (e1, e2) = axis.any_orthonormal_pair();
-    jittered_grid(n, strata).into_iter().map(|u| disk_point(center, radius, (e1, e2), u)).collect()
+    jittered_grid(n, strata).into_iter().map(|u| disk_point(center, radius, basis, u)).collect()
 }
 
 /// The point `u` of the unit square on the disk of `radius` around `center`
@@ -245,6 +245,28 @@ pub fn scene_axis(center: DVec3, scene: &PreparedScene) -> DVec3 {
     (scene_center - center).try_normalize().unwrap_or(DVec3::NEG_Y)
 }
 
+/// Unit vectors `(e1, e2)` spanning the plane perpendicular to `axis` (unit),
+/// fixed by the camera rather than by the world's axes: `e1` along the
+/// camera's view direction with its `axis` part removed (its right vector
+/// where the view runs along `axis`), `e2 = axis x e1`. Turning the whole
+/// scene, camera and light included, turns this frame with it, which
+/// `any_orthonormal_pair` (built from the world axes) does not: the points a
+/// method places on the light with it then stay where they were on the scene
+/// (issue 31: `adaptive`'s four corner points, which decide its quadtree).
+pub fn camera_basis(axis: DVec3, camera: &Camera) -> (DVec3, DVec3) {
+    let eye = DVec3::from(camera.eye.map(f64::from));
+    let forward = (DVec3::from(camera.target.map(f64::from)) - eye).try_normalize().unwrap_or(DVec3::NEG_Z);
+    let up = DVec3::from(camera.up.map(f64::from));
+    let right = forward.cross(up).try_normalize().unwrap_or_else(|| forward.any_orthonormal_vector());
+    let reject = |v: DVec3| v - axis * v.dot(axis);
+    // forward and right are orthonormal: when forward is within 0.06 degrees
+    // of axis (|rejection|^2 < 1e-6), right is within as much of the plane,
+    // so its rejection has length about 1 and normalises safely.
+    let f = reject(forward);
+    let e1 = if f.length_squared() >= 1e-6 { f.normalize() } else { reject(right).try_normalize().unwrap_or_else(|| axis.any_orthonormal_vector()) };
+    (e1, axis.cross(e1))
+}
+
 /// [`sphere_samples`] of the light (`center`, `radius`) for the receivers of
 /// `scene`: around [`scene_axis`], over the cap [`visible_cap_cos_of`] gives
 /// for the scene's corners. Shared by `reference` and `raytraced`.
@@ -295,7 +317,8 @@ mod tests {
     fn samples_fill_the_disk_evenly_and_deterministically() {
         let c = DVec3::new(1.0, 5.0, 0.0);
         let axis = DVec3::NEG_Y;
-        let s = light_samples(c, 0.5, axis, 256, 7);
+        let basis = axis.any_orthonormal_pair();
+        let s = light_samples(c, 0.5, basis, 256, 7);
         assert_eq!(s.len(), 256);
         assert!(s.iter().all(|p| (*p - c).length() <= 0.5 + 1e-12 && (*p - c).dot(axis).abs() < 1e-12));
         // Stratified: the mean is near the centre and each quadrant holds a quarter.
@@ -303,10 +326,33 @@ mod tests {
         assert!((mean - c).length() < 0.01, "{mean}");
         let q = s.iter().filter(|p| p.x > c.x && p.z > c.z).count();
         assert!((56..=72).contains(&q), "{q}");
-        assert_eq!(s, light_samples(c, 0.5, axis, 256, 7));
-        assert_ne!(s, light_samples(c, 0.5, axis, 256, 8));
-        assert_eq!(light_samples(c, 0.0, axis, 256, 7), vec![c]);
-        assert_eq!(light_samples(c, 0.5, axis, 10, 7).len(), 12, "rounded up to a 4 x 3 grid");
+        assert_eq!(s, light_samples(c, 0.5, basis, 256, 7));
+        assert_ne!(s, light_samples(c, 0.5, basis, 256, 8));
+        assert_eq!(light_samples(c, 0.0, basis, 256, 7), vec![c]);
+        assert_eq!(light_samples(c, 0.5, basis, 10, 7).len(), 12, "rounded up to a 4 x 3 grid");
+    }
+
+    #[test]
+    fn the_camera_basis_turns_with_the_scene_and_survives_a_view_along_the_axis() {
+        use glam::DQuat;
+        let camera = Camera { eye: [3.0, 2.0, 4.0], target: [0.0, 0.5, 0.0], up: [0.0, 1.0, 0.0], fov_y_degrees: 45.0, width: 8, height: 8 };
+        let axis = DVec3::new(0.2, -1.0, 0.1).normalize();
+        let (e1, e2) = camera_basis(axis, &camera);
+        for (a, b) in [(e1, e1), (e2, e2), (e1, axis), (e2, axis), (e1, e2)] {
+            let want = if a == b { 1.0 } else { 0.0 };
+            assert!((a.dot(b) - want).abs() < 1e-12);
+        }
+        assert!((e1.cross(e2) - axis).length() < 1e-12, "right-handed");
+        let q = DQuat::from_euler(glam::EulerRot::XYZ, 0.52, 0.35, -0.2);
+        let turn = |p: [f32; 3]| (q * DVec3::from(p.map(f64::from))).as_vec3().to_array();
+        let turned = Camera { eye: turn(camera.eye), target: turn(camera.target), up: turn(camera.up), ..camera };
+        let (t1, t2) = camera_basis(q * axis, &turned);
+        assert!((t1 - q * e1).length() < 1e-6 && (t2 - q * e2).length() < 1e-6, "the frame turns with the scene");
+        // Looking straight along the axis: the right vector takes over.
+        let along = Camera { eye: [0.0, 5.0, 0.0], target: [0.0, 0.0, 0.0], up: [0.0, 0.0, -1.0], ..camera };
+        let (a1, a2) = camera_basis(DVec3::NEG_Y, &along);
+        assert!(a1.is_finite() && (a1.length() - 1.0).abs() < 1e-12 && a1.dot(DVec3::Y).abs() < 1e-12);
+        assert!((a2.length() - 1.0).abs() < 1e-12);
     }
 
     #[test]

@@ -38,7 +38,7 @@ use crate::gpu::layout;
 use crate::gpu::PassTimestamps;
 use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
 use crate::light_frustum::{light_sample_error, LightProjection, ProjectionMode};
-use crate::light_sampling::{disk_point, scene_axis};
+use crate::light_sampling::{camera_basis, disk_point, scene_axis};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::centre_map;
@@ -475,7 +475,9 @@ impl Method for AdaptiveShadows {
         }
         let (center, radius) = (frame.ctx.light.center, frame.ctx.light.radius);
         let axis = scene_axis(center, frame.ctx.prepared);
-        let basis = axis.any_orthonormal_pair();
+        // The square's corners lie where the camera's frame puts them, so that
+        // they turn with the scene (issue 31; any frame serves the paper).
+        let basis = camera_basis(axis, frame.ctx.camera);
         let (w, h) = frame.ctx.size;
         let target = (((w as f64 * params.comparison_scale).round() as u32).max(1), ((h as f64 * params.comparison_scale).round() as u32).max(1));
         let texels = target.0 as usize * target.1 as usize;

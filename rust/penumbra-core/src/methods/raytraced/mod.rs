@@ -195,7 +195,7 @@ impl Method for RaytracedShadows {
         // The first pass's points: a stratified set on the unit disk (the
         // shader places it on the light's disk facing each pixel).
         let coarse: Vec<SampleUniform> = if adaptive {
-            light_samples(DVec3::ZERO, 1.0, DVec3::Z, params.adaptive_samples, params.seed ^ COARSE_SEED)
+            light_samples(DVec3::ZERO, 1.0, DVec3::Z.any_orthonormal_pair(), params.adaptive_samples, params.seed ^ COARSE_SEED)
                 .into_iter()
                 .map(|u| SampleUniform { position: [u.x as f32, u.y as f32, 0.0, 0.0], normal: [0.0; 4] })
                 .collect()

@@ -39,7 +39,7 @@ use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::gpu::pool::PooledTexture;
 use crate::light_frustum::{light_sample_error, LightProjection};
-use crate::light_sampling::{light_samples, scene_axis, scene_sphere_samples, LightSample, Strata};
+use crate::light_sampling::{camera_basis, light_samples, scene_axis, scene_sphere_samples, LightSample, Strata};
 use crate::method::{Method, MethodOutput};
 use crate::params::{ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
@@ -152,7 +152,8 @@ impl Method for ReferenceShadows {
             let strata = if params.jitter { Strata::Jittered(params.seed) } else { Strata::Centred };
             let samples = match params.sampling {
                 LightSampling::Disk => {
-                    let points = light_samples(center, radius, scene_axis(center, scene), params.n_samples, strata);
+                    // The disk's frame turns with the camera (and the scene): adaptive's.
+                    let points = light_samples(center, radius, camera_basis(scene_axis(center, scene), ctx.camera), params.n_samples, strata);
                     let weight = 1.0 / points.len() as f64;
                     points.into_iter().map(|position| LightSample { position, normal: None, weight }).collect()
                 }
