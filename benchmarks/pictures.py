@@ -3,7 +3,7 @@ from the benchmark configs):
 
 - real_meshes_spot.png, real_meshes_teapot.png (docs/real_meshes.md):
   visibility of the truth, pvm with repairs="none" (the paper's construction
-  as written), pvm and pvmf (penumbra.comparison.RECOMMENDED), side by side,
+  as written), pvm and pvmf (its defaults), side by side,
   spot and the teapot seen close at radius 0.3, 160x160;
 - wedges_limits.png (docs/methods/wedges.md): the paper's section 8
   limitations, overlapping wedges of two casters summed and one silhouette
@@ -23,18 +23,18 @@ import numpy as np
 
 import penumbra
 from penumbra import mitsuba as pm
-from penumbra.comparison import RECOMMENDED, compare
+from penumbra.comparison import compare
 
 
 def real_meshes(renderer: penumbra.Renderer, out: Path) -> None:
     for mesh in ("spot.obj", "teapot-mcguire-closed.obj"):
         scene = penumbra.scenes.get(f"mesh:{mesh}", width=160, height=160, light_radius=0.3)
         tiles = [pm.ground_truth(scene, spp=1024, kinds=("visibility",)).visibility]
-        tiles += [renderer.render(scene, m, **p).visibility for m, p in (("pvm", {"repairs": "none"}), ("pvm", {}), ("pvmf", RECOMMENDED["pvmf"]))]
+        tiles += [renderer.render(scene, m, **p).visibility for m, p in (("pvm", {"repairs": "none"}), ("pvm", {}), ("pvmf", {}))]
         gap = np.full((tiles[0].shape[0], 4), 0.5, dtype=np.float32)
         path = out / f"real_meshes_{mesh.split('.')[0].split('-')[0]}.png"
         penumbra.write_image(path, np.concatenate([t for tile in tiles for t in (tile, gap)][:-1], axis=1))
-        print(f"wrote {path}: truth | pvm repairs=none | pvm | pvmf recommended")
+        print(f"wrote {path}: truth | pvm repairs=none | pvm | pvmf")
 
 
 def wedges(renderer: penumbra.Renderer, out: Path) -> None:
