@@ -126,9 +126,18 @@ def test_every_form_of_a_closed_mesh_casts_the_welded_shadow(renderer: penumbra.
         if form == "mirrored":
             v = np.fliplr(v)
         moved[form] = forms.moved_fraction(reference.visibility, v, ground)
-        if moved[form] > KNOWN.get((path.name, method, form), BOUND):
+        bound = KNOWN.get((path.name, method, form), BOUND)
+        if form == "mirrored" and "n_samples" not in params and "seed" in penumbra.method_info(method).defaults():
+            # The mirrored image is flipped: each ground point takes another
+            # pixel's jitter, as another seed would give it. Measured: pcss on
+            # the cube moves 0.70% mirrored and 0.67% with seed 1 (its scaled
+            # search's noise; 0.20% and 0.20% with search="uniform"). Held
+            # to 1.5x the method's own seed noise where that is larger.
+            other = renderer.render(base, method, **{**params, "seed": 1})
+            bound = max(bound, 1.5 * forms.moved_fraction(welded.visibility, other.visibility, ground))
+        if moved[form] > bound:
             folder = leave_images(f"{path.name}-{method}-{form}", v, welded.visibility, ARTIFACTS)
-            pytest.fail(f"{path.name}, {method}, {form}: {100 * moved[form]:.2f}% of ground pixels moved by more than 0.1 (bound {100 * BOUND}%); images in {folder}")
+            pytest.fail(f"{path.name}, {method}, {form}: {100 * moved[form]:.2f}% of ground pixels moved by more than 0.1 (bound {100 * bound:.2f}%); images in {folder}")
 
 
 @pytest.mark.gpu
