@@ -54,16 +54,15 @@ BOUND = 0.002  # the issue's: at most 0.2% of ground pixels move by more than 0.
 # teapot 0.20% (the light's frustum was aimed along the mean direction to
 # the corners, which a doubled face counts twice; it now aims at the centre
 # of their bounding box, light_frustum.rs).
-# One case of the slow run is held to what it measures: adaptive on the
-# reversed cube (0.98%). Surfaces are one-sided, so the reversed cube's lit
-# faces are dark on the cube itself (every method; the ground is what is
-# compared), and adaptive's subdivision (Schwarzler 3.3.2) splits a light
-# cell wherever any pixel of the image disagrees: the cube's own pixels ask
-# for 84 light samples against the welded cube's 48, and the ground's
-# estimate moves with them (by more than 0.1 on 1% of its pixels; it passed
-# by chance with the earlier frustum). A property of the method's global
-# refinement, not of connectivity.
-KNOWN: dict[tuple[str, str, str], float] = {("cube.obj", "adaptive", "reversed"): 0.011}
+# adaptive on the reversed cube moved 0.98% (the slow run), held to that
+# until issue 31: surfaces are one-sided, so the reversed cube's lit faces
+# are dark on the cube itself, and adaptive's subdivision (Schwarzler 3.3.2)
+# splits a light cell wherever any pixel of the image disagrees (84 light
+# samples against the welded cube's 48). With the light square's corners in
+# the camera's frame (light_sampling::camera_basis) the two cubes still take
+# other samples (63 against 79), but the ground moves by none: within the
+# bound like every other case.
+KNOWN: dict[tuple[str, str, str], float] = {}
 # Invariance compares a method with itself: fewer light samples suffice,
 # except under a mirror. The light's samples lie in a frame that a mirror
 # does not carry (a right-handed frame stays right-handed), so the mirrored
