@@ -24,7 +24,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::frame::{Frame, Intermediate};
 use crate::gpu::formats;
 use crate::gpu::layout;
@@ -82,6 +82,10 @@ pub struct PvmfParams {
     pub filter: Filter,
     pub offsets: Offsets,
     pub kernel: Kernel,
+    /// Weigh each failing tap by the part of the light its occluder hides,
+    /// within that occluder's light cone (`estimate = "area"`), rather than
+    /// counting the failing taps (5.2, `"pcf"`).
+    pub area_estimate: bool,
     /// Filter pixels that fail the shadow-map test outside every volume (5.2).
     pub filter_umbra: bool,
     pub open_edges: OpenEdges,
@@ -157,7 +161,10 @@ pub fn mask_key(params: &PvmfParams, projection: &LightProjection, (l, r): (DVec
 /// The uniform blocks of pass 3.
 fn estimate_uniforms(params: &PvmfParams, projection: &LightProjection, light: ([f32; 3], f32)) -> (ShadowTestUniform, SettingsUniform) {
     let test = params.shadow.uniform(projection, light.0, light.1, 0);
-    let flags = u32::from(params.kernel == Kernel::Disk) | (u32::from(!params.filter_umbra) << 1) | (u32::from(params.repairs.horizon) << 2);
+    let flags = u32::from(params.kernel == Kernel::Disk)
+        | (u32::from(!params.filter_umbra) << 1)
+        | (u32::from(params.repairs.horizon) << 2)
+        | (u32::from(params.area_estimate) << 3);
     let settings = SettingsUniform { s_p: params.s_p as f32, n_pcf: params.n_pcf, seed: params.seed as u32, flags, blur_min_width: params.blur_min_width as f32 };
     (test, settings)
 }
@@ -219,6 +226,12 @@ impl Method for PenumbraVolumeMaskFiltering {
             Filter::spec(),
             ParamSpec::choice("offsets", "radius", &["unit", "radius"], "extrusion offsets of 5.1: unit vectors (the paper), or scaled by the light's radius"),
             ParamSpec::choice("kernel", "disk", &["square", "disk"], "filter taps: the paper's square, or the disk the light projects to"),
+            ParamSpec::choice(
+                "estimate",
+                "pcf",
+                &["pcf", "area"],
+                "the estimate over the taps: the fraction that fail (5.2), or each failing tap weighted by the part of the light its occluder hides, within its light cone",
+            ),
             ParamSpec::choice("umbra", "skip", &["filter", "skip"], "pixels failing the test outside every volume: filter them (5.2, the paper) or give them 0"),
             OpenEdges::spec(),
             ParamSpec::choice(
@@ -231,6 +244,11 @@ impl Method for PenumbraVolumeMaskFiltering {
     }
 
     fn params(p: &ParamSet) -> Result<PvmfParams> {
+        if p.choice("estimate") == "area" && p.choice("kernel") == "square" {
+            return Err(Error::InvalidParameter(
+                "pvmf: estimate='area' takes its taps on the disk the light projects to; kernel='square' does not apply (use kernel='disk')".to_owned(),
+            ));
+        }
         Ok(PvmfParams {
             shadow: ShadowMapSettings::from_params(p),
             s_e: p.float("s_e"),
@@ -242,6 +260,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             filter: Filter::from_params(p),
             offsets: if p.choice("offsets") == "radius" { Offsets::Radius } else { Offsets::Unit },
             kernel: if p.choice("kernel") == "disk" { Kernel::Disk } else { Kernel::Square },
+            area_estimate: p.choice("estimate") == "area",
             filter_umbra: p.choice("umbra") == "filter",
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
