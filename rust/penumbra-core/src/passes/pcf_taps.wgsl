@@ -218,3 +218,70 @@ fn square_to_disk(s: vec2<f32>) -> vec2<f32> {
     let phi = (PI / 2.0) - (PI / 4.0) * (a.x / a.y);
     return a.y * vec2<f32>(cos(phi), sin(phi));
 }
+
+// Light-area taps (`pvmf`'s and `pcss`'s estimate = "area", beyond their
+// papers' fraction of failing taps): the part of the light that the
+// occluders under a disk kernel hide from the receiver. An occluder at
+// distance z from the light hides light only within the light's cone
+// through z, whose radius R(z) (texels at the receiver) shrinks as z nears
+// the receiver, and a point x of it hides dx / (pi R(z)^2) of the light's
+// disk, so
+//   hidden = integral over the kernel of fail(x) [|x| <= R(z(x))] / (pi R(z(x))^2) dx.
+// The taps estimate it from two sets combined by the balance heuristic
+// (Veach), in units of the kernel's radius: three in four uniform over the
+// disk, one in four log-radial (radius t0^(1 - u) for u uniform: as many
+// taps per octave, down to half a texel), so that an occluder near the
+// receiver, whose cone is small, is still hit by several taps. (On the 40
+// generated scenes with pvmf: a half share measured 0.0754 median penumbra
+// RMSE, a quarter 0.0688, an eighth 0.0734.)
+struct AreaTaps {
+    // The log-radial set's inner radius (kernel radii) and -ln of it.
+    t0: f32,
+    octaves: f32,
+    // Taps of each set; n_log is 0 for a kernel narrower than a texel or a single tap.
+    n_uniform: f32,
+    n_log: f32,
+};
+
+// The two sets for `count` taps over a kernel of `radius_texels` (its
+// smaller radius, in texels).
+fn area_taps(count: u32, radius_texels: f32) -> AreaTaps {
+    let t0 = clamp(0.5 / max(radius_texels, 1e-30), 1e-6, 1.0);
+    let two_sets = t0 < 0.5 && count > 1u;
+    let n_log = select(0.0, f32(count / 4u), two_sets);
+    return AreaTaps(t0, -log(t0), f32(count) - n_log, n_log);
+}
+
+// Tap i (of n x n) in kernel radii: jittered in its stratum of the unit
+// disk (Shirley and Chiu), then, for every fourth tap when there are two
+// sets, carried to radius t0^(1 - rho^2) (rho^2 is uniform for a uniform
+// disk point) along the same direction.
+fn area_tap(taps: AreaTaps, i: u32, n: u32, jitter: vec2<f32>) -> vec2<f32> {
+    let u = square_to_disk(grid_tap(i, n, jitter));
+    if (taps.n_log == 0.0 || (i & 3u) != 3u || i / 4u >= u32(taps.n_log)) {
+        return u;
+    }
+    let rho2 = dot(u, u);
+    let t = exp(-taps.octaves * (1.0 - rho2));
+    // rho2 > 0 but at the disk's centre, whose direction is any.
+    return select(vec2<f32>(t, 0.0), u * (t / sqrt(rho2)), rho2 > 1e-12);
+}
+
+// The share of the light a tap at x (kernel radii) hides: `failed` (the
+// part of its footprint that fails the test) over the light's disk at the
+// occluder's depth, pi cone.x cone.y (kernel radii, per axis), and over the
+// two sets' density there; 0 outside that cone.
+fn area_share(taps: AreaTaps, x: vec2<f32>, cone: vec2<f32>, failed: f32) -> f32 {
+    let q = x / max(cone, vec2<f32>(1e-30));
+    if (failed <= 0.0 || dot(q, q) > 1.0) {
+        return 0.0;
+    }
+    // Densities per unit kernel area: uniform 1 / pi; log-radial
+    // 1 / (2 pi t^2 octaves) from t0 to 1.
+    let t2 = dot(x, x);
+    var density = taps.n_uniform / PI;
+    if (taps.n_log > 0.0 && t2 >= taps.t0 * taps.t0) {
+        density += taps.n_log / (2.0 * PI * max(t2, 1e-30) * taps.octaves);
+    }
+    return failed / (PI * max(cone.x * cone.y, 1e-30)) / density;
+}

@@ -87,6 +87,9 @@ pub struct PcssParams {
     /// and is all it sees where the centre has set below that plane (the
     /// silhouette methods' `horizon` repair); off: the paper's centre test.
     pub horizon: bool,
+    /// The filter's estimate: the fraction of failing taps (Fernando 2005,
+    /// step 3), or the part of the light their occluders hide (`"area"`).
+    pub area: bool,
 }
 
 crate::gpu_type! {
@@ -101,6 +104,8 @@ crate::gpu_type! {
         pub(crate) scaled: u32,
         /// 1: `PcssParams::horizon`.
         pub(crate) horizon: u32,
+        /// 1: `PcssParams::area`.
+        pub(crate) area: u32,
     }
 }
 
@@ -137,6 +142,12 @@ impl Method for PercentageCloserSoftShadows {
                 &Search::NAMES,
                 "where the blocker search's taps go: scaled (the receiver's texel, then as many taps per octave of the search radius, so that blockers near the receiver are found under a large search radius), uniform (the paper's: over the search disk)",
             ),
+            ParamSpec::choice(
+                "estimate",
+                "pcf",
+                &["pcf", "area"],
+                "the filter's estimate: the fraction of failing taps (the paper's), or each failing tap weighted by the part of the light its occluder hides, within its light cone (walls beside a receiver hide none)",
+            ),
             ParamSpec::bool(
                 "horizon",
                 true,
@@ -156,6 +167,7 @@ impl Method for PercentageCloserSoftShadows {
             blocker_test: if p.choice("blocker_test") == "cone" { BlockerTest::Cone } else { BlockerTest::Plane },
             search: if p.choice("search") == "uniform" { Search::Uniform } else { Search::Scaled },
             horizon: p.bool("horizon"),
+            area: p.choice("estimate") == "area",
         };
         if params.sampling == Sampling::Poisson {
             for (name, n) in [("blocker_samples", params.blocker_samples), ("filter_samples", params.filter_samples)] {
@@ -218,6 +230,7 @@ impl Method for PercentageCloserSoftShadows {
                 cone: u32::from(params.blocker_test == BlockerTest::Cone),
                 scaled: u32::from(params.search == Search::Scaled),
                 horizon: u32::from(params.horizon),
+                area: u32::from(params.area),
             };
             let sampling = ctx.parameters("pcss::sampling_uniforms", &sampling);
             let samplers = ComparisonSamplers::shared(ctx.device, ctx.pool);

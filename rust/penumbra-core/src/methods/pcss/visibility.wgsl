@@ -26,6 +26,8 @@ struct PcssSampling {
     scaled: u32,
     // 1: the horizon repair (parameter `horizon`).
     horizon: u32,
+    // 1: estimate "area"; 0: "pcf" (the paper's).
+    area: u32,
 };
 
 struct PcssPixel {
@@ -256,6 +258,35 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssP
     // 3. Percentage-closer filtering over that disk (step 3).
     atomicAdd(&counters[1], 1u);
     let nf = pcss.filter_samples;
+    // estimate "area" (a departure from step 3, which counts the failing
+    // taps as if every occluder lay at d_b): each failing tap hides the part
+    // of the light its occluder covers within its own light cone
+    // (passes/pcf_taps.wgsl, `area_taps`). The cone at depth z, relative to
+    // the filter's (d_b's), is ((d_r - z) / z) / ((d_r - d_b) / d_b); a texel
+    // nearer the light than d_b counts as at d_b, so an occluder at d_b
+    // covering the disk hides all of the light, as step 3 has it; a wall
+    // beside the receiver, outside its cone, hides none. A filter narrower
+    // than a texel is the receiver's own test (step 3 below).
+    if (pcss.area == 1u && filter_radius >= 0.5) {
+        let taps = area_taps(nf * nf, filter_radius);
+        // d_b < d_r here (filter_radius > 0), so the spread is positive.
+        let spread_b = (r.depth - d_b) / d_b;
+        var hidden = 0.0;
+        for (var i = 0u; i < nf * nf; i++) {
+            let x = area_tap(taps, i, nf, jitter2(px, pcss.seed, FILTER_STREAM + i));
+            let c = r.coords + filter_radius * x;
+            let failed = 1.0 - pcf_tap(shadow, shadow_map, cmp_sampler, r, c);
+            if (failed <= 0.0) {
+                continue;
+            }
+            // A failing tap read a drawn texel: its depth z >= near > 0.
+            let z = max(texel_blocker(r, c).z, d_b);
+            let cone = min(max(r.depth - z, 0.0) / z / spread_b, 1.0);
+            hidden += area_share(taps, x, vec2<f32>(cone), failed);
+        }
+        out.v = 1.0 - min(hidden, 1.0);
+        return out;
+    }
     var sum = 0.0;
     for (var i = 0u; i < nf * nf; i++) {
         let c = r.coords + filter_radius * disk_tap(px, i, nf, FILTER_STREAM, rot);

@@ -98,50 +98,28 @@ fn unclamped_width(r: Receiver, p: vec3<f32>, spread: f32) -> vec2<f32> {
 
 // estimate = "area" (beyond 5.2, whose estimate is the fraction of failing
 // taps over a kernel sized for one occluder distance, d_o): the part of the
-// light that the failing taps' occluders hide. An occluder at distance z
-// from the light hides light from the receiver (at d_r) only within the
-// light's cone through z, of radius R(z) = r (d_r - z) / (z texel_r)
-// texels around the receiver's own (the radius w_pcf gives at d_o), and a
-// point x of it hides the share dx / (pi R(z)^2) of the light's disk. So
-//   hidden = integral over the kernel of fail(x) [|x| <= R(z(x))] / (pi R(z(x))^2) dx,
-// estimated with taps from two sets combined by the balance heuristic
-// (Veach), in the kernel's own units (its radius 1): three in four uniform
-// over the disk, one in four log-radial (radius t0^(1 - u) for u uniform: as
-// many taps per octave of radius, down to half a texel), so that an occluder
-// near the receiver, whose cone is small, is still hit by several taps (a
-// half share measured 0.0754 median penumbra RMSE over the 40 generated
-// scenes, a quarter 0.0688, an eighth 0.0734). A texel nearer the light than
-// d_o counts as at d_o (below). An occluder at d_o covering the kernel then
-// hides all of the light (s_p >= 2: the kernel holds its cone; (s_p / 2)^2
-// below), one nearer the receiver all of it too, with its own smaller cone,
-// and a surface beside the receiver outside its cone (a wall meeting the
-// floor) none. v = 1 - min(hidden, 1). `spread_o` is (d_r - d_o) / d_o, `w`
-// the kernel's width (per axis, texels), `w_o` the same unclamped (s_p
-// times the light's radius at d_o).
+// light the failing taps' occluders hide (passes/pcf_taps.wgsl,
+// `area_taps`). An occluder at distance z from the light hides light from
+// the receiver (at d_r) within the light's cone through z, of radius
+// R(z) = r (d_r - z) / (z texel_r) texels: R(d_o) (w_o / s_p) times
+// ((d_r - z) / z) / ((d_r - d_o) / d_o). A texel nearer the light than d_o
+// (the top of a thick caster, whose silhouette edges at d_o bound what it
+// hides) counts as at d_o, which gives a single caster 5.2's estimate back:
+// one at d_o covering the kernel hides all of the light (s_p >= 2: the
+// kernel holds its cone; (s_p / 2)^2 below). One nearer the receiver hides
+// all of its own smaller cone, and a surface beside the receiver outside
+// its cone (a wall meeting the floor) nothing. `spread_o` is
+// (d_r - d_o) / d_o, `w` the kernel's width (per axis, texels), `w_o` the
+// same unclamped.
 fn area_estimate(r: Receiver, px: vec2<u32>, d_r: f32, spread_o: f32, w: vec2<f32>, w_o: vec2<f32>) -> f32 {
     let ls = pvmf.light_space;
     let half_w = 0.5 * w;
     // The light's radius at d_o, in kernel radii, per axis.
     let light_o = w_o / max(settings.s_p, 1e-30) / max(half_w, vec2<f32>(1e-30));
-    // The log-radial set starts half a texel out; a kernel narrower than a
-    // texel takes only uniform taps.
-    let t0 = clamp(0.5 / max(min(half_w.x, half_w.y), 1e-30), 1e-6, 1.0);
-    let octaves = -log(t0);
-    let count = settings.n_pcf * settings.n_pcf;
-    let two_sets = t0 < 0.5 && count > 1u;
-    let n_log = select(0.0, f32(count / 4u), two_sets);
-    let n_uniform = f32(count) - n_log;
+    let taps = area_taps(settings.n_pcf * settings.n_pcf, min(half_w.x, half_w.y));
     var hidden = 0.0;
-    for (var i = 0u; i < count; i++) {
-        let u = 0.5 * square_to_disk(grid_tap(i, settings.n_pcf, jitter2(px, settings.seed, i))) * 2.0;
-        let rho2 = dot(u, u);
-        var x = u;
-        if (two_sets && (i & 3u) == 3u) {
-            // Radius t0^(1 - rho^2): rho^2 is uniform for a uniform disk point.
-            // rho2 > 0 unless the point is the centre, whose direction is any.
-            let t = exp(-octaves * (1.0 - rho2));
-            x = select(vec2<f32>(t, 0.0), u * (t / sqrt(rho2)), rho2 > 1e-12);
-        }
+    for (var i = 0u; i < settings.n_pcf * settings.n_pcf; i++) {
+        let x = area_tap(taps, i, settings.n_pcf, jitter2(px, settings.seed, i));
         let c = r.coords + x * half_w;
         let failed = 1.0 - pcf_tap(pvmf, shadow_map, shadow_sampler, r, c);
         if (failed <= 0.0) {
@@ -150,25 +128,10 @@ fn area_estimate(r: Receiver, px: vec2<u32>, d_r: f32, spread_o: f32, w: vec2<f3
         let m = receiver_read(ls, r, c);
         // The occluder's distance from the light along the tap's ray.
         let z = map_point_depth(ls, shadow_map, MapPoint(m.layer, floor(m.coords) + 0.5)) * length(light_ray(ls, m.layer, m.coords));
-        // Its cone relative to d_o's: (d_r - z) / z over (d_r - d_o) / d_o;
         // z > 0 (no surface touches the light), spread_o > 0 (a filtered
-        // pixel lies beyond its occluders): the max keeps both finite. A
-        // texel nearer the light than d_o (the top of a thick caster, whose
-        // silhouette edges at d_o bound what it hides) counts as at d_o: a
-        // single caster then gets 5.2's estimate back.
+        // pixel lies beyond its occluders): the max keeps both divisions finite.
         let cone = light_o * min(max(d_r - z, 0.0) / max(z, 1e-30) / max(spread_o, 1e-30), 1.0);
-        let q = x / max(cone, vec2<f32>(1e-30));
-        if (dot(q, q) > 1.0) {
-            continue;
-        }
-        // Densities per unit kernel area (radius 1): uniform 1 / pi; log-radial
-        // 1 / (2 pi t^2 octaves) from t0 to 1.
-        let t2 = dot(x, x);
-        var density = n_uniform / PI;
-        if (two_sets && t2 >= t0 * t0) {
-            density += n_log / (2.0 * PI * max(t2, 1e-30) * octaves);
-        }
-        hidden += failed / (PI * max(cone.x * cone.y, 1e-30)) / density;
+        hidden += area_share(taps, x, cone, failed);
     }
     return hidden;
 }
@@ -211,7 +174,9 @@ fn shade(pixel: ScreenPixel) {
                 let d_r = length(p - pvmf.center.xyz);
                 let spread_o = max(d_r - d_o, 0.0) / max(d_o, 1e-30);
                 let w_o = unclamped_width(r, p, spread_o);
-                if (area) {
+                // A kernel narrower than a texel is the receiver's own test:
+                // there the taps' cones shrink to nothing, and 5.2's filter serves.
+                if (area && min(w.x, w.y) >= 1.0) {
                     v = 1.0 - min(area_estimate(r, vec2<u32>(pixel.px), d_r, spread_o, w, w_o), 1.0);
                 } else {
                     var sum = 0.0;
