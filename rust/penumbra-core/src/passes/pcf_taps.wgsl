@@ -247,10 +247,23 @@ fn surface_step(t: ShadowTest, map: texture_depth_2d_array, s: StoredTexel, axis
 // cone test, an occluder's texels outside the cone from p to the light
 // still count, so a search still finds the blockers of the outer penumbra.
 // Where no tangent plane is found (an isolated texel, or parallel steps)
-// the texel is taken as behind: the plane test alone decides. The one
-// division is by the normal's length, checked nonzero.
+// the texel is taken as behind: the plane test alone decides. The
+// divisions are by a nonzero largest component and by the normal's length,
+// checked nonzero.
+// The direction of v, scaled by its largest component first so that its
+// squared length neither overflows nor underflows at any scene scale; zero
+// for zero.
+fn direction(v: vec3<f32>) -> vec3<f32> {
+    let m = max(abs(v.x), max(abs(v.y), abs(v.z)));
+    if (m == 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return normalize(v / m);
+}
+
 fn receiver_behind(t: ShadowTest, map: texture_depth_2d_array, s: StoredTexel, p: vec3<f32>) -> bool {
-    let n = cross(surface_step(t, map, s, vec2<f32>(1.0, 0.0)), surface_step(t, map, s, vec2<f32>(0.0, 1.0)));
+    // Unit steps: the normal's length is at most 1, whatever the scale.
+    let n = cross(direction(surface_step(t, map, s, vec2<f32>(1.0, 0.0))), direction(surface_step(t, map, s, vec2<f32>(0.0, 1.0))));
     let length_n = length(n);
     let facing = dot(n, t.center.xyz - s.q);
     if (length_n == 0.0 || facing == 0.0) {

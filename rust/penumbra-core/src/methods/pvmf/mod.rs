@@ -240,8 +240,8 @@ impl Method for PenumbraVolumeMaskFiltering {
             ),
             ParamSpec::choice(
                 "blocker_test",
-                "behind",
-                &["behind", "plane"],
+                "plane",
+                &["plane", "behind"],
                 "which failing taps hide the light: plane (5.2: a texel nearer the light than the receiver's plane), behind (and the receiver lies behind the texel's own surface: walls and floors beside a receiver hide nothing)",
             ),
             ParamSpec::choice("umbra", "skip", &["filter", "skip"], "pixels failing the test outside every volume: filter them (5.2, the paper) or give them 0"),
