@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from collections.abc import Iterable
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 
@@ -175,8 +175,13 @@ class _Image:
     def __set_name__(self, owner: type, name: str) -> None:
         self.name = name
 
-    def __get__(self, result: RenderResult, owner: type | None = None) -> np.ndarray:
-        return result._image(self.name)
+    @overload
+    def __get__(self, result: None, owner: type) -> _Image: ...
+    @overload
+    def __get__(self, result: RenderResult, owner: type | None = None) -> np.ndarray: ...
+    def __get__(self, result: RenderResult | None, owner: type | None = None) -> np.ndarray | _Image:
+        # On the class (help(), the docs): the attribute itself, with its doc.
+        return self if result is None else result._image(self.name)
 
 
 @dataclass
