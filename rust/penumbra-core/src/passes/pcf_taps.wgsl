@@ -183,6 +183,93 @@ fn pcf_tap(t: ShadowTest, map: texture_depth_2d_array, cmp: sampler_comparison, 
     return textureSampleCompareLevel(map, cmp, m.coords / ls.depth.z, m.layer, reference);
 }
 
+// The map texel a tap at coordinates `c` of the receiver's layer reads: its
+// layer, its centre there, and the point the map stores (`drawn` false
+// where nothing was: the far plane, or a cube face not rendered).
+struct StoredTexel {
+    layer: i32,
+    centre: vec2<f32>,
+    // Stored depth along the layer's axis, world units.
+    depth: f32,
+    q: vec3<f32>,
+    drawn: bool,
+};
+
+fn stored_texel(t: ShadowTest, map: texture_depth_2d_array, r: Receiver, c: vec2<f32>) -> StoredTexel {
+    let ls = t.light_space;
+    let m = receiver_read(ls, r, c);
+    let centre = vec2<f32>(map_texel(textureDimensions(map), m)) + 0.5;
+    let stored = map_point_depth(ls, map, MapPoint(m.layer, centre));
+    // The stored point: along the read layer's ray, whose depth along that
+    // layer's axis is 1 per unit.
+    let q = t.center.xyz + light_ray(ls, m.layer, centre) * stored;
+    return StoredTexel(m.layer, centre, stored, q, stored < ls.depth.y);
+}
+
+// The stored point of the texel `d` texels from `s`'s in its layer, less
+// s's point, where that texel is in the map and drawn; else zero.
+fn stored_step(t: ShadowTest, map: texture_depth_2d_array, s: StoredTexel, d: vec2<f32>) -> vec3<f32> {
+    let ls = t.light_space;
+    let c = s.centre + d;
+    if (any(c < vec2<f32>(0.0)) || any(c >= vec2<f32>(textureDimensions(map)))) {
+        return vec3<f32>(0.0);
+    }
+    let stored = map_point_depth(ls, map, MapPoint(s.layer, c));
+    if (stored >= ls.depth.y) {
+        return vec3<f32>(0.0);
+    }
+    return t.center.xyz + light_ray(ls, s.layer, c) * stored - s.q;
+}
+
+// Of the steps to a texel's two neighbours along one axis, the one to the
+// nearer stored point (the same surface, where the other crosses a depth
+// edge); zero where neither is drawn.
+fn surface_step(t: ShadowTest, map: texture_depth_2d_array, s: StoredTexel, axis: vec2<f32>) -> vec3<f32> {
+    let ahead = stored_step(t, map, s, axis);
+    let back = stored_step(t, map, s, -axis);
+    let la = dot(ahead, ahead);
+    let lb = dot(back, back);
+    if (la == 0.0 || (lb > 0.0 && lb < la)) {
+        return -back;
+    }
+    return ahead;
+}
+
+// The "behind" test of a map texel (a departure from the receiver-plane
+// test of Fernando 2005 and Cournia 5.2, option `blocker_test="behind"`):
+// whether the receiver p lies behind the surface the map stores at `s` (its
+// tangent plane through the neighbouring texels' points, facing the light's
+// centre) by more than a texel's extent there. A ray from p to a point of
+// the light that an occluder hides leaves the occluder through a surface
+// that p is behind; a wall or floor beside p, nearer the light than p's
+// plane (a room's concave corners, or every other surface where p's plane
+// passes near the light), has p in front of it and hides nothing. Unlike a
+// cone test, an occluder's texels outside the cone from p to the light
+// still count, so a search still finds the blockers of the outer penumbra.
+// Where no tangent plane is found (an isolated texel, or parallel steps)
+// the texel is taken as behind: the plane test alone decides. The one
+// division is by the normal's length, checked nonzero.
+fn receiver_behind(t: ShadowTest, map: texture_depth_2d_array, s: StoredTexel, p: vec3<f32>) -> bool {
+    let n = cross(surface_step(t, map, s, vec2<f32>(1.0, 0.0)), surface_step(t, map, s, vec2<f32>(0.0, 1.0)));
+    let length_n = length(n);
+    let facing = dot(n, t.center.xyz - s.q);
+    if (length_n == 0.0 || facing == 0.0) {
+        return true;
+    }
+    let behind = -dot(n, p - s.q) * sign(facing) / length_n;
+    return behind > light_texel_size(t.light_space, s.depth);
+}
+
+// `pcf_tap`, with a failing tap whose texel's surface the receiver p is not
+// behind (`receiver_behind`) counted lit, when `behind` is set.
+fn pcf_tap_behind(t: ShadowTest, map: texture_depth_2d_array, cmp: sampler_comparison, r: Receiver, c: vec2<f32>, p: vec3<f32>, behind: bool) -> f32 {
+    let lit = pcf_tap(t, map, cmp, r, c);
+    if (lit < 1.0 && behind && !receiver_behind(t, map, stored_texel(t, map, r, c), p)) {
+        return 1.0;
+    }
+    return lit;
+}
+
 // PCG hash (O'Neill; the "pcg" of Jarzynski and Olano 2020).
 fn pcg_hash(v: u32) -> u32 {
     let state = v * 747796405u + 2891336453u;

@@ -59,15 +59,28 @@ impl Search {
 /// Which texels of the blocker search are blockers: `Plane`, the paper's,
 /// those nearer the light than the receiver's plane; `Cone`, of those, the
 /// ones inside the cone from the receiver to the light at their own depth
-/// (the only points that can hide part of the light from it).
+/// (the only points that can hide part of the light from it); `Behind`, of
+/// the plane's, the ones whose own surface (as the map stores it, facing the
+/// light) has the receiver behind it: the only surfaces a ray from the
+/// receiver to the light can leave an occluder through.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BlockerTest {
     Plane,
     Cone,
+    Behind,
 }
 
 impl BlockerTest {
-    const NAMES: [&'static str; 2] = ["plane", "cone"];
+    const NAMES: [&'static str; 3] = ["plane", "cone", "behind"];
+
+    /// The shader's code (`PcssSampling::blocker_test`).
+    fn code(self) -> u32 {
+        match self {
+            BlockerTest::Plane => 0,
+            BlockerTest::Cone => 1,
+            BlockerTest::Behind => 2,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -97,8 +110,8 @@ crate::gpu_type! {
         pub(crate) filter_samples: u32,
         pub(crate) seed: u32,
         pub(crate) poisson: u32,
-        /// 1: `BlockerTest::Cone`.
-        pub(crate) cone: u32,
+        /// `BlockerTest::code`: 0 plane, 1 cone, 2 behind.
+        pub(crate) blocker_test: u32,
         /// 1: `Search::Scaled`.
         pub(crate) scaled: u32,
         /// 1: `PcssParams::horizon`.
@@ -131,9 +144,9 @@ impl Method for PercentageCloserSoftShadows {
             ParamSpec::choice("sampling", "grid", &Sampling::NAMES, "disk taps: a jittered grid, or a fixed Poisson-disk set"),
             ParamSpec::choice(
                 "blocker_test",
-                "plane",
+                "behind",
                 &BlockerTest::NAMES,
-                "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers)",
+                "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers), behind (and the receiver lies behind the blocker's own surface, as the map stores it: walls and floors beside a receiver are no blockers, an occluder's texels outside the cone still are)",
             ),
             ParamSpec::choice(
                 "search",
@@ -163,7 +176,11 @@ impl Method for PercentageCloserSoftShadows {
             seed: p.int("seed") as u32,
             filter: Filter::from_params(p),
             sampling: if p.choice("sampling") == "poisson" { Sampling::Poisson } else { Sampling::Grid },
-            blocker_test: if p.choice("blocker_test") == "cone" { BlockerTest::Cone } else { BlockerTest::Plane },
+            blocker_test: match p.choice("blocker_test") {
+                "cone" => BlockerTest::Cone,
+                "behind" => BlockerTest::Behind,
+                _ => BlockerTest::Plane,
+            },
             search: if p.choice("search") == "uniform" { Search::Uniform } else { Search::Scaled },
             horizon: p.bool("horizon"),
             area: p.choice("estimate") == "area",
@@ -216,7 +233,7 @@ impl Method for PercentageCloserSoftShadows {
                 filter_samples: params.filter_samples,
                 seed: params.seed,
                 poisson: u32::from(params.sampling == Sampling::Poisson),
-                cone: u32::from(params.blocker_test == BlockerTest::Cone),
+                blocker_test: params.blocker_test.code(),
                 scaled: u32::from(params.search == Search::Scaled),
                 horizon: u32::from(params.horizon),
                 area: u32::from(params.area),

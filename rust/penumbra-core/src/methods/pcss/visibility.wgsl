@@ -20,8 +20,8 @@ struct PcssSampling {
     seed: u32,
     // 1: Poisson-disk taps; 0: jittered grid.
     poisson: u32,
-    // 1: blocker_test "cone"; 0: "plane" (the paper's).
-    cone: u32,
+    // blocker_test: 0 "plane" (the paper's), 1 "cone", 2 "behind".
+    blocker_test: u32,
     // 1: search "scaled"; 0: "uniform" (the paper's).
     scaled: u32,
     // 1: the horizon repair (parameter `horizon`).
@@ -106,32 +106,27 @@ fn disk_tap(px: vec2<u32>, i: u32, n: u32, stream: u32, rot: vec2<f32>) -> vec2<
 // passes above the receiver's plane's horizon.
 struct Texel {
     // The stored depth along the receiver's axis and the receiver's plane
-    // there (x >= y: no blocker), and the stored point in world space.
+    // there (z >= plane: no blocker), and the texel read.
     z: f32,
     plane: f32,
-    q: vec3<f32>,
+    stored: StoredTexel,
 };
 
 fn texel_blocker(r: Receiver, c: vec2<f32>) -> Texel {
     let ls = shadow.light_space;
-    let m = receiver_read(ls, r, c);
-    let centre = vec2<f32>(map_texel(textureDimensions(shadow_map), m)) + 0.5;
-    let stored = map_point_depth(ls, shadow_map, MapPoint(m.layer, centre));
-    if (stored >= ls.depth.y) {
-        return Texel(1.0, 0.0, vec3<f32>(0.0));
+    let s = stored_texel(shadow, shadow_map, r, c);
+    if (!s.drawn) {
+        return Texel(1.0, 0.0, s);
     }
-    // The stored point: along the read layer's ray, whose depth along that
-    // layer's axis is 1 per unit.
-    let q = shadow.center.xyz + light_ray(ls, m.layer, centre) * stored;
     // The texel centre in the receiver's coordinates.
-    var at = centre;
-    if (r.layer < 0 || m.layer != r.layer) {
-        at = receiver_coords(ls, r, light_ray(ls, m.layer, centre));
+    var at = s.centre;
+    if (r.layer < 0 || s.layer != r.layer) {
+        at = receiver_coords(ls, r, light_ray(ls, s.layer, s.centre));
     }
     // The read layer's depth per unit depth along the receiver's axis is
     // positive: the direction's dominant axis is the read face's.
-    let z = stored / receiver_depth_scale(ls, r, at, m.layer);
-    return Texel(z, plane_depth(shadow, r, at), q);
+    let z = s.depth / receiver_depth_scale(ls, r, at, s.layer);
+    return Texel(z, plane_depth(shadow, r, at), s);
 }
 
 // Whether the point q can hide part of the light's sphere from p: the
@@ -227,9 +222,12 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssP
         // light's sphere; a texel's extent (light_texel_size at its depth,
         // seen from p) is the slack. Walls and floors beside a receiver (a
         // room's corners) pass the plane test and fail this one.
-        if (blocker && pcss.cone == 1u) {
+        if (blocker && pcss.blocker_test == 1u) {
             let extent = light_texel_size(ls, b.z);
-            blocker = in_light_cone(p, b.q, extent / max(length(b.q - p), extent));
+            blocker = in_light_cone(p, b.stored.q, extent / max(length(b.stored.q - p), extent));
+        }
+        if (blocker && pcss.blocker_test == 2u) {
+            blocker = receiver_behind(shadow, shadow_map, b.stored, p);
         }
         if (blocker) {
             blocker_sum += b.z;
@@ -290,7 +288,11 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssP
     var sum = 0.0;
     for (var i = 0u; i < nf * nf; i++) {
         let c = r.coords + filter_radius * disk_tap(px, i, nf, FILTER_STREAM, rot);
-        sum += pcf_tap(shadow, shadow_map, cmp_sampler, r, c);
+        // blocker_test "behind" holds the filter's failing taps to the
+        // search's test: a surface the receiver is in front of (a wall
+        // beside it, or every other surface where the receiver's plane
+        // passes near the light) hides nothing.
+        sum += pcf_tap_behind(shadow, shadow_map, cmp_sampler, r, c, p, pcss.blocker_test == 2u);
     }
     // nf >= 1 (checked on the CPU).
     out.v = sum / f32(nf * nf);

@@ -21,7 +21,8 @@ struct PvmfSettings {
     seed: u32,
     // bit 0: disk kernel (else the paper's square); bit 1: skip pixels that
     // fail the shadow-map test outside every volume (else filter them, 5.2);
-    // bit 2: repair "horizon"; bit 3: estimate "area".
+    // bit 2: repair "horizon"; bit 3: estimate "area"; bit 4: blocker_test
+    // "behind".
     flags: u32,
     // The blur takes only pixels whose w_pcf is at least this many texels.
     blur_min_width: f32,
@@ -111,7 +112,7 @@ fn unclamped_width(r: Receiver, p: vec3<f32>, spread: f32) -> vec2<f32> {
 // its cone (a wall meeting the floor) nothing. `spread_o` is
 // (d_r - d_o) / d_o, `w` the kernel's width (per axis, texels), `w_o` the
 // same unclamped.
-fn area_estimate(r: Receiver, px: vec2<u32>, d_r: f32, spread_o: f32, w: vec2<f32>, w_o: vec2<f32>) -> f32 {
+fn area_estimate(r: Receiver, p: vec3<f32>, px: vec2<u32>, d_r: f32, spread_o: f32, w: vec2<f32>, w_o: vec2<f32>) -> f32 {
     let ls = pvmf.light_space;
     let half_w = 0.5 * w;
     // The light's radius at d_o, in kernel radii, per axis.
@@ -121,7 +122,7 @@ fn area_estimate(r: Receiver, px: vec2<u32>, d_r: f32, spread_o: f32, w: vec2<f3
     for (var i = 0u; i < settings.n_pcf * settings.n_pcf; i++) {
         let x = area_tap(taps, i, settings.n_pcf, jitter2(px, settings.seed, i));
         let c = r.coords + x * half_w;
-        let failed = 1.0 - pcf_tap(pvmf, shadow_map, shadow_sampler, r, c);
+        let failed = 1.0 - pcf_tap_behind(pvmf, shadow_map, shadow_sampler, r, c, p, (settings.flags & 16u) != 0u);
         if (failed <= 0.0) {
             continue;
         }
@@ -177,7 +178,7 @@ fn shade(pixel: ScreenPixel) {
                 // A kernel narrower than a texel is the receiver's own test:
                 // there the taps' cones shrink to nothing, and 5.2's filter serves.
                 if (area && min(w.x, w.y) >= 1.0) {
-                    v = 1.0 - min(area_estimate(r, vec2<u32>(pixel.px), d_r, spread_o, w, w_o), 1.0);
+                    v = 1.0 - min(area_estimate(r, p, vec2<u32>(pixel.px), d_r, spread_o, w, w_o), 1.0);
                 } else {
                     var sum = 0.0;
                     for (var i = 0u; i < n_pcf * n_pcf; i++) {
@@ -189,7 +190,9 @@ fn shade(pixel: ScreenPixel) {
                             // in the square, with the same strata.
                             s = 0.5 * square_to_disk(s);
                         }
-                        sum += pcf_tap(pvmf, shadow_map, shadow_sampler, r, r.coords + s * w);
+                        // blocker_test "behind" (beyond 5.2): a failing tap counts only
+                        // where the receiver lies behind its texel's surface.
+                        sum += pcf_tap_behind(pvmf, shadow_map, shadow_sampler, r, r.coords + s * w, p, (settings.flags & 16u) != 0u);
                     }
                     v = sum / f32(n_pcf * n_pcf);
                 }

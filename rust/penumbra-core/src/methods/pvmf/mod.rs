@@ -85,6 +85,11 @@ pub struct PvmfParams {
     /// within that occluder's light cone (`estimate = "area"`), rather than
     /// counting the failing taps (5.2, `"pcf"`).
     pub area_estimate: bool,
+    /// Count a failing tap only where the receiver lies behind the surface
+    /// its texel stores (`blocker_test = "behind"`, `passes/pcf_taps.wgsl`'s
+    /// `receiver_behind`), not wherever that texel is nearer the light than
+    /// the receiver's plane (5.2, `"plane"`).
+    pub behind: bool,
     /// Filter pixels that fail the shadow-map test outside every volume (5.2).
     pub filter_umbra: bool,
     pub open_edges: OpenEdges,
@@ -163,7 +168,8 @@ fn estimate_uniforms(params: &PvmfParams, projection: &LightProjection, light: (
     let flags = u32::from(params.kernel == Kernel::Disk)
         | (u32::from(!params.filter_umbra) << 1)
         | (u32::from(params.repairs.horizon) << 2)
-        | (u32::from(params.area_estimate) << 3);
+        | (u32::from(params.area_estimate) << 3)
+        | (u32::from(params.behind) << 4);
     let settings = SettingsUniform { s_p: params.s_p as f32, n_pcf: params.n_pcf, seed: params.seed as u32, flags, blur_min_width: params.blur_min_width as f32 };
     (test, settings)
 }
@@ -231,6 +237,12 @@ impl Method for PenumbraVolumeMaskFiltering {
                 &["pcf", "area"],
                 "the estimate over the taps: the fraction that fail (5.2), or each failing tap weighted by the part of the light its occluder hides, within its light cone",
             ),
+            ParamSpec::choice(
+                "blocker_test",
+                "behind",
+                &["behind", "plane"],
+                "which failing taps hide the light: plane (5.2: a texel nearer the light than the receiver's plane), behind (and the receiver lies behind the texel's own surface: walls and floors beside a receiver hide nothing)",
+            ),
             ParamSpec::choice("umbra", "skip", &["filter", "skip"], "pixels failing the test outside every volume: filter them (5.2, the paper) or give them 0"),
             OpenEdges::spec(),
             ParamSpec::choice(
@@ -260,6 +272,7 @@ impl Method for PenumbraVolumeMaskFiltering {
             offsets: if p.choice("offsets") == "radius" { Offsets::Radius } else { Offsets::Unit },
             kernel: if p.choice("kernel") == "disk" { Kernel::Disk } else { Kernel::Square },
             area_estimate: p.choice("estimate") == "area",
+            behind: p.choice("blocker_test") == "behind",
             filter_umbra: p.choice("umbra") == "filter",
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
