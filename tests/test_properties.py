@@ -132,7 +132,14 @@ def render(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str, **ex
 
 
 CI = settings(max_examples=3, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])
-LONG = settings(max_examples=40, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])
+LONG = settings(CI, max_examples=40)
+# Each property runs on CI's examples, and on LONG's under `pytest -m slow`.
+EXAMPLES = [pytest.param(CI, id="ci"), pytest.param(LONG, id="long", marks=pytest.mark.slow)]
+
+
+def on_random_scenes(examples: settings, check: Callable[..., None], **strategies: st.SearchStrategy[Any]) -> None:
+    """`check(spec, ...)` on random scenes (and the other `strategies`), as many as `examples` says."""
+    examples(given(spec=scene_specs(), **strategies)(check))()
 
 # Log10 of the uniform scale of the whole scene, from 1e-7 to 1e10 (issue
 # 22: a scene 1e-7 across was refused as "the light intersects mesh" by an
@@ -159,19 +166,10 @@ def _finite_in_range_and_deterministic(renderer: penumbra.Renderer, spec: SceneS
         np.testing.assert_array_equal(a.images[key], b.images[key], err_msg=key)
 
 
+@pytest.mark.parametrize("examples", EXAMPLES)
 @pytest.mark.parametrize("method", METHODS)
-@CI
-@given(spec=scene_specs(), data=st.data())
-def test_random_scenes_are_finite_in_range_and_deterministic(renderer: penumbra.Renderer, method: str, spec: SceneSpec, data: st.DataObject) -> None:
-    _finite_in_range_and_deterministic(renderer, spec, data.draw(scales(method), label="exponent"), method)
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("method", METHODS)
-@LONG
-@given(spec=scene_specs(), data=st.data())
-def test_random_scenes_are_finite_in_range_and_deterministic_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec, data: st.DataObject) -> None:
-    _finite_in_range_and_deterministic(renderer, spec, data.draw(scales(method), label="exponent"), method)
+def test_random_scenes_are_finite_in_range_and_deterministic(renderer: penumbra.Renderer, method: str, examples: settings) -> None:
+    on_random_scenes(examples, lambda spec, exponent: _finite_in_range_and_deterministic(renderer, spec, exponent, method), exponent=scales(method))
 
 
 # Visibility of the same scene at another scale and place. Measured by
@@ -211,19 +209,10 @@ def _scale_and_translation_invariant(renderer: penumbra.Renderer, spec: SceneSpe
     assert frac <= MISMATCH_FRACTION and mean <= MEAN_DIFFERENCE, f"{spec} scaled by 1e{exponent}: {frac:.4f} of pixels differ, mean {mean:.4f}"
 
 
+@pytest.mark.parametrize("examples", EXAMPLES)
 @pytest.mark.parametrize("method", METHODS)
-@CI
-@given(spec=scene_specs(), data=st.data())
-def test_uniform_scale_and_translation_leave_visibility_unchanged(renderer: penumbra.Renderer, method: str, spec: SceneSpec, data: st.DataObject) -> None:
-    _scale_and_translation_invariant(renderer, spec, data.draw(scales(method), label="exponent"), method)
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("method", METHODS)
-@LONG
-@given(spec=scene_specs(), data=st.data())
-def test_uniform_scale_and_translation_leave_visibility_unchanged_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec, data: st.DataObject) -> None:
-    _scale_and_translation_invariant(renderer, spec, data.draw(scales(method), label="exponent"), method)
+def test_uniform_scale_and_translation_leave_visibility_unchanged(renderer: penumbra.Renderer, method: str, examples: settings) -> None:
+    on_random_scenes(examples, lambda spec, exponent: _scale_and_translation_invariant(renderer, spec, exponent, method), exponent=scales(method))
 
 
 # The ends of the range for every method, on fixed scenes (the derandomized
@@ -314,19 +303,10 @@ def _converges_to_hard(renderer: penumbra.Renderer, spec: SceneSpec, method: str
     assert np.abs(tiny - hard).mean() <= np.abs(wide - hard).mean() + 1e-3
 
 
+@pytest.mark.parametrize("examples", EXAMPLES)
 @pytest.mark.parametrize("method", SOFT_METHODS)
-@CI
-@given(spec=scene_specs())
-def test_small_radius_converges_to_hard(renderer: penumbra.Renderer, method: str, spec: SceneSpec) -> None:
-    _converges_to_hard(renderer, spec, method)
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("method", SOFT_METHODS)
-@LONG
-@given(spec=scene_specs())
-def test_small_radius_converges_to_hard_long(renderer: penumbra.Renderer, method: str, spec: SceneSpec) -> None:
-    _converges_to_hard(renderer, spec, method)
+def test_small_radius_converges_to_hard(renderer: penumbra.Renderer, method: str, examples: settings) -> None:
+    on_random_scenes(examples, lambda spec: _converges_to_hard(renderer, spec, method))
 
 
 def test_pcf_with_a_zero_kernel_is_hard(renderer: penumbra.Renderer) -> None:

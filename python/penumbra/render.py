@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from collections.abc import Iterable
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 
@@ -164,6 +164,26 @@ def write_image(path: str | bytes | os.PathLike[str] | os.PathLike[bytes], image
     _core.write_image(path, data)
 
 
+class _Image:
+    """A read-only attribute of :class:`RenderResult` that is one of its
+    images, by the attribute's name (``result.visibility`` is
+    ``result["visibility"]``), documented by ``doc``."""
+
+    def __init__(self, doc: str) -> None:
+        self.__doc__ = doc
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    @overload
+    def __get__(self, result: None, owner: type) -> _Image: ...
+    @overload
+    def __get__(self, result: RenderResult, owner: type | None = None) -> np.ndarray: ...
+    def __get__(self, result: RenderResult | None, owner: type | None = None) -> np.ndarray | _Image:
+        # On the class (help(), the docs): the attribute itself, with its doc.
+        return self if result is None else result._image(self.name)
+
+
 @dataclass
 class RenderResult:
     """One render: images by name (linear float32 numpy arrays; ``object_id``
@@ -184,35 +204,12 @@ class RenderResult:
             raise ParameterError(f"this result has no image {name!r}: it read back {sorted(self.images)} (see Renderer.render's outputs=)")
         return self.images[name]
 
-    @property
-    def radiance(self) -> np.ndarray:
-        """Linear radiance, float32 (H, W, 3)."""
-        return self._image("radiance")
-
-    @property
-    def visibility(self) -> np.ndarray:
-        """Visible fraction of the light in [0, 1], float32 (H, W); 0 on background."""
-        return self._image("visibility")
-
-    @property
-    def depth(self) -> np.ndarray:
-        """Distance along the camera axis, float32 (H, W); 0 on background."""
-        return self._image("depth")
-
-    @property
-    def normal(self) -> np.ndarray:
-        """Unit shading normal, float32 (H, W, 3); 0 on background."""
-        return self._image("normal")
-
-    @property
-    def position(self) -> np.ndarray:
-        """World position, float32 (H, W, 3); 0 on background."""
-        return self._image("position")
-
-    @property
-    def object_id(self) -> np.ndarray:
-        """Object id, int32 (H, W); -1 on background."""
-        return self._image("object_id")
+    radiance = _Image("Linear radiance, float32 (H, W, 3).")
+    visibility = _Image("Visible fraction of the light in [0, 1], float32 (H, W); 0 on background.")
+    depth = _Image("Distance along the camera axis, float32 (H, W); 0 on background.")
+    normal = _Image("Unit shading normal, float32 (H, W, 3); 0 on background.")
+    position = _Image("World position, float32 (H, W, 3); 0 on background.")
+    object_id = _Image("Object id, int32 (H, W); -1 on background.")
 
     @property
     def reused_passes(self) -> list[str]:

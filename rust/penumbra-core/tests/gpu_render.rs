@@ -97,7 +97,7 @@ fn bad_parameters_are_typed_errors() {
 mod half_light {
     use penumbra_core::frame::Frame;
     use penumbra_core::gpu::pool::{Binding, ResourcePool};
-    use penumbra_core::gpu::{formats, layout};
+    use penumbra_core::gpu::layout;
     use penumbra_core::method::{Method, MethodOutput};
     use penumbra_core::params::{ParamSet, ParamSpec};
     use penumbra_core::passes::screen::ScreenPass;
@@ -134,8 +134,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 
         fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
             let source = format!("{}\n{WGSL}", penumbra_core::shaders::compose("shaders/receiver.wgsl"));
-            let storage = |b| layout::storage_texture(b, formats::VISIBILITY);
-            Self { visibility: ScreenPass::new(device, pool, "half_light::visibility", source, &[storage], &["main"]) }
+            Self { visibility: ScreenPass::per_pixel(device, pool, "half_light::visibility", source, &[layout::visibility_storage]) }
         }
 
         fn record(&self, frame: &mut Frame<'_>, _: &f64) -> Result<MethodOutput> {

@@ -30,6 +30,11 @@ pub fn storage_texture(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindG
     write_only_storage(binding, format, wgpu::TextureViewDimension::D2)
 }
 
+/// The visibility image a screen pass writes (`texture_storage_2d<r32float, write>`).
+pub fn visibility_storage(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    storage_texture(binding, super::formats::VISIBILITY)
+}
+
 /// A write-only storage binding of a light-space array image (compute),
 /// `texture_storage_2d_array`.
 pub fn storage_array_texture(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {

@@ -47,6 +47,12 @@ impl ScreenPass {
         Self { label, layout, pipelines }
     }
 
+    /// A pass whose one entry point is `main` (that of
+    /// `shaders/per_pixel.wgsl`, or the pass's own).
+    pub fn per_pixel(device: &wgpu::Device, pool: &crate::gpu::pool::ResourcePool, label: &'static str, source: String, entries: &[LayoutEntry]) -> Self {
+        Self::new(device, pool, label, source, entries, &["main"])
+    }
+
     /// The bind group of the frame's G-buffer and `resources`.
     pub fn bind_group(&self, ctx: &FrameContext<'_>, resources: &[Binding<'_>]) -> wgpu::BindGroup {
         let g = &ctx.gbuffer;

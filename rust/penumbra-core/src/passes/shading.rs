@@ -4,7 +4,7 @@
 use crate::frame::FrameContext;
 use crate::gpu::{formats, layout, PassTimestamps};
 use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
-use crate::passes::screen::ScreenPass;
+use crate::passes::screen::{LayoutEntry, ScreenPass};
 
 
 crate::gpu_type! {
@@ -22,15 +22,9 @@ pub struct ShadingPass {
 
 impl ShadingPass {
     pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let pass = ScreenPass::new(
-            device,
-            pool,
-            "shading::pass",
-            crate::shader!("shading.wgsl"),
-            &[layout::float_texture, layout::storage_buffer, layout::parameters, |b| layout::storage_texture(b, formats::RADIANCE)],
-            &["main"],
-        );
-        Self { pass }
+        let radiance: LayoutEntry = |b| layout::storage_texture(b, formats::RADIANCE);
+        let bindings = [layout::float_texture, layout::storage_buffer, layout::parameters, radiance];
+        Self { pass: ScreenPass::per_pixel(device, pool, "shading::pass", crate::shader!("shading.wgsl"), &bindings) }
     }
 
     /// Radiance of the frame's pixels from the G-buffer and `visibility`.

@@ -422,38 +422,15 @@ impl Method for AdaptiveShadows {
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let compare = ScreenPass::new(
-            device,
-            pool,
-            "adaptive::compare",
-            crate::shader!("compare.wgsl"),
-            &[
-                layout::depth_array,
-                layout::depth_array,
-                layout::depth_array,
-                layout::depth_array,
-                layout::parameters,
-                layout::storage_buffer_rw,
-                layout::storage_buffer_rw,
-                layout::storage_buffer_rw,
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-            ],
-            &["compare", "ring", "image"],
-        );
-        let evaluate = ScreenPass::new(
-            device,
-            pool,
-            "adaptive::evaluate",
-            crate::shader!("evaluate.wgsl"),
-            &[
-                layout::depth_array,
-                layout::parameters,
-                layout::storage_buffer_rw,
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                layout::comparison_sampler,
-            ],
-            &["accumulate", "resolve"],
-        );
+        // Reads four corners' maps and the cell's block; writes sums, failing
+        // pixels, the level images and an image.
+        let bindings = [
+            layout::depth_array, layout::depth_array, layout::depth_array, layout::depth_array, layout::parameters,
+            layout::storage_buffer_rw, layout::storage_buffer_rw, layout::storage_buffer_rw, layout::visibility_storage,
+        ];
+        let compare = ScreenPass::new(device, pool, "adaptive::compare", crate::shader!("compare.wgsl"), &bindings, &["compare", "ring", "image"]);
+        let bindings = [layout::depth_array, layout::parameters, layout::storage_buffer_rw, layout::visibility_storage, layout::comparison_sampler];
+        let evaluate = ScreenPass::new(device, pool, "adaptive::evaluate", crate::shader!("evaluate.wgsl"), &bindings, &["accumulate", "resolve"]);
         Self { compare, evaluate }
     }
 

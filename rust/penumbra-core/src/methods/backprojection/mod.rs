@@ -279,53 +279,23 @@ impl Method for SoftShadowBackprojection {
             crate::shader!("hierarchy.wgsl"),
         );
         let hierarchy = layout::compute_pipeline_entry(device, "backprojection::hierarchy_pipeline", &module, &hierarchy_layout, "main");
-        let storage = |b| layout::storage_texture(b, formats::VISIBILITY);
-        let discontinuity = ScreenPass::new(
-            device,
-            pool,
-            "backprojection::discontinuity_pass",
-            crate::shader!("discontinuity.wgsl"),
-            &[layout::float_texture, layout::parameters, storage],
-            &["main"],
-        );
-        let classify = ScreenPass::new(
-            device,
-            pool,
-            "backprojection::classify_pass",
-            crate::shader!("classify.wgsl"),
-            &object_map::with_bindings(&[
-                layout::depth_array,
-                layout::storage_buffer,
-                layout::parameters,
-                layout::parameters,
-                layout::float_texture,
-                storage,
-                storage,
-                storage,
-                storage,
-                layout::storage_buffer_rw,
-                layout::storage_buffer_rw,
-            ]),
-            &["main"],
-        );
-        let visibility = ScreenPass::new(
-            device,
-            pool,
-            "backprojection::visibility_pass",
-            crate::shader!("visibility.wgsl"),
-            &[
-                layout::depth_array,
-                layout::storage_buffer,
-                layout::parameters,
-                layout::parameters,
-                layout::float_texture,
-                layout::float_texture,
-                layout::storage_buffer,
-                storage,
-                layout::storage_buffer_rw,
-            ],
-            &["main"],
-        );
+        let storage = layout::visibility_storage;
+        let bindings = [layout::float_texture, layout::parameters, storage];
+        let discontinuity = ScreenPass::per_pixel(device, pool, "backprojection::discontinuity_pass", crate::shader!("discontinuity.wgsl"), &bindings);
+        // Reads the map, the hierarchy, two parameter blocks and the
+        // discontinuities; writes visibility, class, kernel, level, the pixel list and the counters.
+        let bindings = object_map::with_bindings(&[
+            layout::depth_array, layout::storage_buffer, layout::parameters, layout::parameters, layout::float_texture,
+            storage, storage, storage, storage, layout::storage_buffer_rw, layout::storage_buffer_rw,
+        ]);
+        let classify = ScreenPass::per_pixel(device, pool, "backprojection::classify_pass", crate::shader!("classify.wgsl"), &bindings);
+        // Reads the map, the hierarchy, two parameter blocks, the kernel and
+        // level images and the pixel list; writes visibility and the counters.
+        let bindings = [
+            layout::depth_array, layout::storage_buffer, layout::parameters, layout::parameters, layout::float_texture, layout::float_texture, layout::storage_buffer,
+            storage, layout::storage_buffer_rw,
+        ];
+        let visibility = ScreenPass::per_pixel(device, pool, "backprojection::visibility_pass", crate::shader!("visibility.wgsl"), &bindings);
         let pull_push_layout = pool.layout(
             device,
             "backprojection::pull_push_layout",
@@ -334,7 +304,7 @@ impl Method for SoftShadowBackprojection {
                 layout::float_texture(1),
                 layout::parameters(2),
                 layout::storage_buffer_rw(3),
-                layout::storage_texture(4, formats::VISIBILITY),
+                layout::visibility_storage(4),
             ],
         );
         let module = crate::shaders::module(

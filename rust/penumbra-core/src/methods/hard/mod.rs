@@ -3,7 +3,6 @@
 
 use crate::error::Result;
 use crate::frame::Frame;
-use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
@@ -38,15 +37,8 @@ impl Method for HardShadow {
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let visibility = ScreenPass::new(
-            device,
-            pool,
-            "hard::visibility_pass",
-            crate::shader!("visibility.wgsl"),
-            &[layout::depth_array, layout::parameters, |b| layout::storage_texture(b, formats::VISIBILITY)],
-            &["main"],
-        );
-        Self { visibility }
+        let bindings = [layout::depth_array, layout::parameters, layout::visibility_storage];
+        Self { visibility: ScreenPass::per_pixel(device, pool, "hard::visibility_pass", crate::shader!("visibility.wgsl"), &bindings) }
     }
 
     /// The shadow-map test per G-buffer pixel.

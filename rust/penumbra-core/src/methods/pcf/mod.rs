@@ -12,7 +12,6 @@
 
 use crate::error::Result;
 use crate::frame::Frame;
-use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
@@ -76,21 +75,8 @@ impl Method for PercentageCloserFiltering {
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let visibility = ScreenPass::new(
-            device,
-            pool,
-            "pcf::visibility_pass",
-            crate::shader!("visibility.wgsl"),
-            &[
-                layout::depth_array,
-                layout::comparison_sampler,
-                layout::parameters,
-                layout::parameters,
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-            ],
-            &["main"],
-        );
-        Self { visibility }
+        let bindings = [layout::depth_array, layout::comparison_sampler, layout::parameters, layout::parameters, layout::visibility_storage];
+        Self { visibility: ScreenPass::per_pixel(device, pool, "pcf::visibility_pass", crate::shader!("visibility.wgsl"), &bindings) }
     }
 
     /// The filtered test per G-buffer pixel.

@@ -16,7 +16,6 @@
 
 use crate::error::{Error, Result};
 use crate::frame::{Frame, Intermediate};
-use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
@@ -204,23 +203,13 @@ impl Method for PercentageCloserSoftShadows {
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let visibility = ScreenPass::new(
-            device,
-            pool,
-            "pcss::visibility_pass",
-            crate::shader!("visibility.wgsl"),
-            &object_map::with_bindings(&[
-                layout::depth_array,
-                layout::comparison_sampler,
-                layout::parameters,
-                layout::parameters,
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                layout::storage_buffer_rw,
-            ]),
-            &["main"],
-        );
+        // Reads the map (through its sampler), the test and sampling blocks;
+        // writes visibility, penumbra width, blocker depth and the counters.
+        let bindings = object_map::with_bindings(&[
+            layout::depth_array, layout::comparison_sampler, layout::parameters, layout::parameters,
+            layout::visibility_storage, layout::visibility_storage, layout::visibility_storage, layout::storage_buffer_rw,
+        ]);
+        let visibility = ScreenPass::per_pixel(device, pool, "pcss::visibility_pass", crate::shader!("visibility.wgsl"), &bindings);
         Self { visibility, object_pass: object_map::pass(device, pool) }
     }
 

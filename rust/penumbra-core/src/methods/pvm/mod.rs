@@ -21,7 +21,6 @@ use glam::DVec3;
 
 use crate::error::Result;
 use crate::frame::{Frame, FrameContext, Intermediate};
-use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, Layout, PooledBuffer, PooledTexture, ResourcePool};
 use crate::light_frustum::LightProjection;
@@ -147,23 +146,13 @@ impl Method for PenumbraVolumeMaps {
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
             &[EDGE_INDEX_FORMAT],
         );
-        let visibility = ScreenPass::new(
-            device,
-            pool,
-            "pvm::visibility_pass",
-            crate::shader!("visibility.wgsl"),
-            &object_map::with_bindings(&[
-                layout::depth_array,
-                layout::depth_array,
-                uint_array,
-                layout::parameters,
-                layout::parameters,
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                layout::storage_buffer_rw,
-            ]),
-            &["main"],
-        );
+        // Reads the map, the volume map's depth and edge indices, the edges and
+        // the test block; writes visibility, membership and the counter.
+        let bindings = object_map::with_bindings(&[
+            layout::depth_array, layout::depth_array, uint_array, layout::parameters, layout::parameters,
+            layout::visibility_storage, layout::visibility_storage, layout::storage_buffer_rw,
+        ]);
+        let visibility = ScreenPass::per_pixel(device, pool, "pvm::visibility_pass", crate::shader!("visibility.wgsl"), &bindings);
         let edge_maps_layout = pool.layout(
             device,
             "pvm::edge_maps_layout",

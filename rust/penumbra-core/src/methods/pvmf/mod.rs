@@ -26,7 +26,6 @@ use glam::DVec3;
 
 use crate::error::{Error, Result};
 use crate::frame::{Frame, Intermediate};
-use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledBuffer, PooledTexture, ResourcePool};
 use crate::light_frustum::LightProjection;
@@ -294,34 +293,16 @@ impl Method for PenumbraVolumeMaskFiltering {
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32],
             &[DISTANCE_FORMAT],
         );
-        let storage = |b| layout::storage_texture(b, formats::VISIBILITY);
-        let estimate = ScreenPass::new(
-            device,
-            pool,
-            "pvmf::estimate_pass",
-            crate::shader!("estimate.wgsl"),
-            &object_map::with_bindings(&[
-                layout::depth_array,
-                layout::depth_array,
-                layout::float_array,
-                layout::comparison_sampler,
-                layout::parameters,
-                layout::parameters,
-                storage,
-                storage,
-                storage,
-                layout::storage_buffer_rw,
-            ]),
-            &["main"],
-        );
-        let blur = ScreenPass::new(
-            device,
-            pool,
-            "pvmf::blur_pass",
-            crate::shader!("blur.wgsl"),
-            &[layout::float_texture, layout::float_texture, layout::parameters, storage, layout::storage_buffer_rw],
-            &["main"],
-        );
+        let storage = layout::visibility_storage;
+        // Reads the map, the mask's depth and d_e, the test and settings blocks;
+        // writes the raw estimate, the blur mask, the filter width and the counters.
+        let bindings = object_map::with_bindings(&[
+            layout::depth_array, layout::depth_array, layout::float_array, layout::comparison_sampler, layout::parameters, layout::parameters,
+            storage, storage, storage, layout::storage_buffer_rw,
+        ]);
+        let estimate = ScreenPass::per_pixel(device, pool, "pvmf::estimate_pass", crate::shader!("estimate.wgsl"), &bindings);
+        let bindings = [layout::float_texture, layout::float_texture, layout::parameters, storage, layout::storage_buffer_rw];
+        let blur = ScreenPass::per_pixel(device, pool, "pvmf::blur_pass", crate::shader!("blur.wgsl"), &bindings);
         Self { mask_pass, estimate, blur, object_pass: object_map::pass(device, pool) }
     }
 

@@ -39,7 +39,6 @@ use glam::DVec3;
 use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::gpu::context::{ray_queries_disabled, RAY_QUERY_ENV};
-use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::light_sampling::{light_samples, scene_sphere_samples, SampleUniform, DEFAULT_RAY_OFFSET};
@@ -152,24 +151,17 @@ impl Method for RaytracedShadows {
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let pass = device.features().contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY).then(|| {
-            ScreenPass::new(
-                device,
-                pool,
-                "raytraced::pass",
-                crate::shader!("visibility.wgsl"),
-                &[
-                    acceleration_structure,
-                    layout::parameters,
-                    layout::storage_buffer,
-                    layout::storage_buffer_rw,
-                    layout::storage_buffer_rw,
-                    |b| layout::storage_texture(b, formats::VISIBILITY),
-                    layout::storage_buffer_rw,
-                ],
-                &["trace", "classify", "select_pixels", "refine"],
-            )
-        });
+        // Reads the scene, the settings and the samples; writes the coarse
+        // estimates, the counters, visibility and the list of pixels to refine.
+        let bindings = [
+            acceleration_structure, layout::parameters, layout::storage_buffer,
+            layout::storage_buffer_rw, layout::storage_buffer_rw, layout::visibility_storage, layout::storage_buffer_rw,
+        ];
+        let entry_points = ["trace", "classify", "select_pixels", "refine"];
+        let pass = device
+            .features()
+            .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
+            .then(|| ScreenPass::new(device, pool, "raytraced::pass", crate::shader!("visibility.wgsl"), &bindings, &entry_points));
         Self { pass, cache: AccelerationCache::default() }
     }
 

@@ -34,7 +34,6 @@ use glam::{DVec3, Vec3};
 
 use crate::error::Result;
 use crate::frame::Frame;
-use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::gpu::pool::PooledTexture;
@@ -124,21 +123,8 @@ impl Method for ReferenceShadows {
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let pass = ScreenPass::new(
-            device,
-            pool,
-            "reference::pass",
-            crate::shader!("visibility.wgsl"),
-            &[
-                layout::depth_array,
-                layout::parameters,
-                layout::storage_buffer_rw,
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                layout::parameters,
-            ],
-            &["accumulate", "resolve"],
-        );
-        Self { pass }
+        let bindings = [layout::depth_array, layout::parameters, layout::storage_buffer_rw, layout::visibility_storage, layout::parameters];
+        Self { pass: ScreenPass::new(device, pool, "reference::pass", crate::shader!("visibility.wgsl"), &bindings, &["accumulate", "resolve"]) }
     }
 
     /// Every sample's shadow map and accumulation, and the resolve, as one

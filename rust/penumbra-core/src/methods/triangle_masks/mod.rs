@@ -44,7 +44,6 @@ use glam::{DVec3, Vec3};
 
 use crate::error::Result;
 use crate::frame::Frame;
-use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::light_sampling::{scene_sphere_samples, LightSample, SampleUniform, DEFAULT_RAY_OFFSET};
@@ -187,24 +186,14 @@ impl Method for TriangleMasks {
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let pass = ScreenPass::new(
-            device,
-            pool,
-            "triangle_masks::pass",
-            crate::shader!("masks.wgsl"),
-            &[
-                layout::parameters,
-                layout::storage_buffer,
-                layout::storage_buffer,
-                layout::storage_buffer_rw,
-                layout::storage_buffer_rw,
-                layout::storage_buffer_rw,
-                layout::storage_buffer_rw,
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-            ],
-            &["tile_bounds", "group_bounds", "count_bins", "scan_bins", "fill_bins", "masks"],
-        );
-        Self { pass }
+        // Reads the settings, the samples and the triangles; writes bounds,
+        // bins, the tile list, the counters and visibility.
+        let bindings = [
+            layout::parameters, layout::storage_buffer, layout::storage_buffer,
+            layout::storage_buffer_rw, layout::storage_buffer_rw, layout::storage_buffer_rw, layout::storage_buffer_rw, layout::visibility_storage,
+        ];
+        let entry_points = ["tile_bounds", "group_bounds", "count_bins", "scan_bins", "fill_bins", "masks"];
+        Self { pass: ScreenPass::new(device, pool, "triangle_masks::pass", crate::shader!("masks.wgsl"), &bindings, &entry_points) }
     }
 
     /// Passes `tile_bounds`, `count_bins` (count and prefix sum),

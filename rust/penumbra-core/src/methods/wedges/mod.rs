@@ -37,7 +37,6 @@ use glam::DMat4;
 
 use crate::error::Result;
 use crate::frame::{Frame, Intermediate};
-use crate::gpu::formats;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledBuffer};
 use crate::method::{Method, MethodOutput};
@@ -212,25 +211,13 @@ impl Method for PenumbraWedges {
     }
 
     fn new(device: &wgpu::Device, pool: &crate::gpu::pool::ResourcePool) -> Self {
-        let visibility = ScreenPass::new(
-            device,
-            pool,
-            "wedges::visibility_pass",
-            crate::shader!("visibility.wgsl"),
-            &object_map::with_bindings(&[
-                layout::depth_array,
-                layout::parameters,
-                layout::storage_buffer,
-                layout::storage_buffer,
-                layout::storage_buffer,
-                layout::parameters,
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                |b| layout::storage_texture(b, formats::VISIBILITY),
-                layout::storage_buffer_rw,
-            ]),
-            &["main"],
-        );
+        // Reads the map, the test block, the wedges, their tile bins and the
+        // settings; writes visibility, the hard term, the intensity and the counter.
+        let bindings = object_map::with_bindings(&[
+            layout::depth_array, layout::parameters, layout::storage_buffer, layout::storage_buffer, layout::storage_buffer, layout::parameters,
+            layout::visibility_storage, layout::visibility_storage, layout::visibility_storage, layout::storage_buffer_rw,
+        ]);
+        let visibility = ScreenPass::per_pixel(device, pool, "wedges::visibility_pass", crate::shader!("visibility.wgsl"), &bindings);
         Self { visibility, object_pass: object_map::pass(device, pool) }
     }
 
