@@ -146,7 +146,7 @@ impl Method for PercentageCloserSoftShadows {
                 "blocker_test",
                 "behind",
                 &BlockerTest::NAMES,
-                "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers), behind (and the receiver lies behind the blocker's own surface, as the map stores it: walls and floors beside a receiver are no blockers, an occluder's texels outside the cone still are)",
+                "blockers of the search: plane (the paper's: nearer the light than the receiver's plane), cone (and inside the cone from the receiver to the light at their depth: walls and floors beside a receiver are no blockers), behind (and the receiver lies behind the blocker's own surface, as the map stores it, in the search and for the filter's failing taps: walls and floors beside a receiver are no blockers, an occluder's texels outside the cone still are)",
             ),
             ParamSpec::choice(
                 "search",
