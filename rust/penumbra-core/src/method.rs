@@ -1,7 +1,7 @@
 //! The method interface (SPEC section 4): one type per method behind one
-//! trait. A method declares its parameters ([`Method::specs`]), parses them
-//! ([`Method::params`]), builds its pipelines ([`Method::new`]) and records a
-//! render against a [`Frame`]; [`entry`] makes its registry line
+//! trait. A method's typed parameters declare and parse its parameters
+//! ([`MethodParams`]); the method builds its pipelines ([`Method::new`]) and
+//! records a render against a [`Frame`]; [`entry`] makes its registry line
 //! (`methods::REGISTRY`). Nothing here names a method.
 
 use std::any::Any;
@@ -10,7 +10,7 @@ use std::sync::Arc;
 use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::gpu::pool::{PooledTexture, ResourcePool};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
 
 /// What a method's passes leave for the renderer: the visibility image
@@ -21,8 +21,8 @@ pub struct MethodOutput {
 
 /// One soft-shadow method.
 ///
-/// A method declares its parameters once ([`Method::specs`]), reads them
-/// into its own typed form ([`Method::params`], where rules between
+/// A method declares its parameters once and reads them into its own typed
+/// form (its [`Method::Params`]' [`MethodParams`], where rules between
 /// parameters are checked), builds its pipelines once ([`Method::new`], on
 /// its first render) and records all of its passes for one render against
 /// a [`Frame`], returning its visibility; it sets its own stats, counters
@@ -32,15 +32,8 @@ pub trait Method: Send + Sync + Sized + 'static {
     const NAME: &'static str;
     /// The paper and sections it implements, for the docs and `penumbra methods`.
     const PAPER: &'static str;
-    /// Its parameters in typed form.
-    type Params: Send + Sync + 'static;
-
-    /// Every parameter it takes, with type, range, default and a line of docs.
-    fn specs() -> Vec<ParamSpec>;
-
-    /// Typed parameters from a checked set; rules between parameters are
-    /// checked here ([`Error::InvalidParameter`]).
-    fn params(set: &ParamSet) -> Result<Self::Params>;
+    /// Its parameters in typed form, with their specs and parsing.
+    type Params: MethodParams;
 
     /// The passes whose outputs the pass cache may keep for it (the
     /// G-buffer is always cacheable; the centre shadow map is
@@ -81,7 +74,7 @@ pub struct Registered {
 }
 
 fn parse_typed<M: Method>(set: &ParamSet) -> Result<Arc<dyn Any + Send + Sync>> {
-    Ok(Arc::new(M::params(set)?))
+    Ok(Arc::new(M::Params::parse(set)?))
 }
 
 fn build<M: Method>(device: &wgpu::Device, pool: &ResourcePool) -> Box<dyn DynMethod> {
@@ -93,7 +86,7 @@ pub const fn entry<M: Method>() -> Registered {
     Registered {
         name: M::NAME,
         paper: M::PAPER,
-        specs: M::specs,
+        specs: M::Params::specs,
         cached_passes: M::cached_passes,
         parse: parse_typed::<M>,
         build: build::<M>,

@@ -9,6 +9,17 @@ use std::fmt;
 
 use crate::error::{Error, Result};
 
+/// A method's parameters in typed form: every parameter it takes, and their
+/// reading from a checked set (`Method::Params`).
+pub trait MethodParams: Sized + Send + Sync + 'static {
+    /// Every parameter, with type, range, default and a line of docs.
+    fn specs() -> Vec<ParamSpec>;
+
+    /// The typed form of a checked set; rules between parameters are
+    /// checked here ([`Error::InvalidParameter`]).
+    fn parse(set: &ParamSet) -> Result<Self>;
+}
+
 /// A parameter value as it arrives from Python or the CLI.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ParamValue {

@@ -99,7 +99,7 @@ mod half_light {
     use penumbra_core::gpu::pool::{Binding, ResourcePool};
     use penumbra_core::gpu::layout;
     use penumbra_core::method::{Method, MethodOutput};
-    use penumbra_core::params::{ParamSet, ParamSpec};
+    use penumbra_core::params::{MethodParams, ParamSet, ParamSpec};
     use penumbra_core::passes::screen::ScreenPass;
     use penumbra_core::Result;
 
@@ -119,25 +119,30 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         visibility: ScreenPass,
     }
 
-    impl Method for HalfLight {
-        const NAME: &'static str = "half_light";
-        const PAPER: &'static str = "a test of the method interface";
-        type Params = f64;
+    /// One parameter, declared and ignored.
+    pub struct Unused;
 
+    impl MethodParams for Unused {
         fn specs() -> Vec<ParamSpec> {
             vec![ParamSpec::float("unused", 1.0, 0.0, 2.0, "a parameter it declares and ignores")]
         }
 
-        fn params(set: &ParamSet) -> Result<f64> {
-            Ok(set.float("unused"))
+        fn parse(_: &ParamSet) -> Result<Unused> {
+            Ok(Unused)
         }
+    }
+
+    impl Method for HalfLight {
+        const NAME: &'static str = "half_light";
+        const PAPER: &'static str = "a test of the method interface";
+        type Params = Unused;
 
         fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
             let source = format!("{}\n{WGSL}", penumbra_core::shaders::compose("shaders/receiver.wgsl"));
             Self { visibility: ScreenPass::per_pixel(device, pool, "half_light::visibility", source, &[layout::visibility_storage]) }
         }
 
-        fn record(&self, frame: &mut Frame<'_>, _: &f64) -> Result<MethodOutput> {
+        fn record(&self, frame: &mut Frame<'_>, _: &Unused) -> Result<MethodOutput> {
             let visibility = frame.ctx.screen_texture("half_light::visibility");
             frame.pass("visibility", |ctx, encoder, ts| self.visibility.run(ctx, encoder, &[Binding::Texture(&visibility)], ts))?;
             frame.stat("half_light_renders", 1);

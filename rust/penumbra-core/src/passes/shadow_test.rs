@@ -14,7 +14,7 @@
 
 use crate::error::{Error, Result};
 use crate::light_frustum::{LightProjection, ProjectionMode};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::passes::shadow_map::{LightSpaceUniform, MapDepth};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -70,22 +70,10 @@ pub struct ShadowMapSettings {
     pub slope_bias: f32,
 }
 
-/// Largest tan(theta) the slope term uses: beyond ~84 degrees the receiver is
-/// nearly edge-on to the light and its irradiance is almost zero anyway.
-const MAX_SLOPE: f32 = 10.0;
-
-impl ShadowMapSettings {
-    /// A method's parameters: those of the map and its test ([`Self::specs`])
-    /// and then the method's own.
-    pub fn specs_and(default_bias: &'static str, own: impl IntoIterator<Item = ParamSpec>) -> Vec<ParamSpec> {
-        let mut specs = Self::specs(default_bias);
-        specs.extend(own);
-        specs
-    }
-
-    /// The parameters of the map and its test, with `default_bias` (one of
-    /// [`BiasMode::NAMES`]).
-    pub fn specs(default_bias: &'static str) -> Vec<ParamSpec> {
+/// The parameters of the map and its test, as every shadow-map method takes
+/// them (`hard` takes these alone).
+impl MethodParams for ShadowMapSettings {
+    fn specs() -> Vec<ParamSpec> {
         vec![
             ParamSpec::map_size(
                 "map_size",
@@ -100,11 +88,29 @@ impl ShadowMapSettings {
                 &ProjectionMode::NAMES,
                 "shadow maps over one fitted frustum, six cube faces, or the frustum where it covers the geometry and the cube elsewhere",
             ),
-            ParamSpec::choice("bias", default_bias, &BiasMode::NAMES, "acne control of the shadow-map test"),
+            ParamSpec::choice("bias", "slope", &BiasMode::NAMES, "acne control of the shadow-map test"),
             ParamSpec::float("normal_offset", 1.0, 0.0, 100.0, "receiver offset along its normal, texels (slope bias)"),
             ParamSpec::float("constant_bias", 0.5, 0.0, 100.0, "constant depth bias, texels (slope bias)"),
             ParamSpec::float("slope_bias", 1.0, 0.0, 100.0, "depth bias per unit tan(theta), texels (slope bias)"),
         ]
+    }
+
+    fn parse(set: &ParamSet) -> Result<Self> {
+        Ok(Self::from_params(set))
+    }
+}
+
+/// Largest tan(theta) the slope term uses: beyond ~84 degrees the receiver is
+/// nearly edge-on to the light and its irradiance is almost zero anyway.
+const MAX_SLOPE: f32 = 10.0;
+
+impl ShadowMapSettings {
+    /// A method's parameters: those of the map and its test
+    /// ([`MethodParams::specs`]) and then the method's own.
+    pub fn specs_and(own: impl IntoIterator<Item = ParamSpec>) -> Vec<ParamSpec> {
+        let mut specs = Self::specs();
+        specs.extend(own);
+        specs
     }
 
     pub fn from_params(p: &ParamSet) -> Self {

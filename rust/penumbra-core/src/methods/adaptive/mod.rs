@@ -40,7 +40,7 @@ use crate::gpu::pool::{Binding, PooledTexture, ResourcePool};
 use crate::light_frustum::{light_sample_error, LightProjection, ProjectionMode};
 use crate::light_sampling::{camera_basis, disk_point, scene_axis};
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::passes::centre_map;
 use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
@@ -343,13 +343,9 @@ impl AdaptiveShadows {
     }
 }
 
-impl Method for AdaptiveShadows {
-    const NAME: &'static str = "adaptive";
-    const PAPER: &'static str = "adaptive light-source sampling (Schwarzler et al. 2013, 3.2-3.4)";
-    type Params = AdaptiveParams;
-
+impl MethodParams for AdaptiveParams {
     fn specs() -> Vec<ParamSpec> {
-        let mut specs: Vec<ParamSpec> = ShadowMapSettings::specs("slope")
+        let mut specs: Vec<ParamSpec> = ShadowMapSettings::specs()
             .into_iter()
             .map(|s| {
                 if s.name == "map_size" {
@@ -398,7 +394,7 @@ impl Method for AdaptiveShadows {
         specs
     }
 
-    fn params(p: &ParamSet) -> Result<AdaptiveParams> {
+    fn parse(p: &ParamSet) -> Result<AdaptiveParams> {
         let params = AdaptiveParams {
             shadow: ShadowMapSettings::from_params(p),
             max_depth: p.int("max_depth") as u32,
@@ -420,6 +416,12 @@ impl Method for AdaptiveShadows {
         }
         Ok(params)
     }
+}
+
+impl Method for AdaptiveShadows {
+    const NAME: &'static str = "adaptive";
+    const PAPER: &'static str = "adaptive light-source sampling (Schwarzler et al. 2013, 3.2-3.4)";
+    type Params = AdaptiveParams;
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         // Reads four corners' maps and the cell's block; writes sums, failing

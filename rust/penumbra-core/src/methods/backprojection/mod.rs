@@ -34,7 +34,7 @@ use crate::gpu::layout;
 use crate::gpu::pool::{Binding, Layout, PooledBuffer, PooledTexture, ResourcePool};
 use crate::light_frustum::LightProjection;
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec, ParamValue};
+use crate::params::{MethodParams, ParamSet, ParamSpec, ParamValue};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::object_map::{self, OBJECT_MAP};
@@ -220,16 +220,11 @@ pub struct SoftShadowBackprojection {
     object_pass: VolumePass,
 }
 
-impl Method for SoftShadowBackprojection {
-    const NAME: &'static str = "backprojection";
-    const PAPER: &'static str = "soft shadow mapping by contour backprojection (Guennebaud, Barthe, Paulin 2007): \
-        min/max shadow-map hierarchy, marching-squares contours, radial area integration, light- and screen-space multi-resolution";
-    type Params = BackprojectionParams;
-
+impl MethodParams for BackprojectionParams {
     fn specs() -> Vec<ParamSpec> {
         // The paper's maps are 1k x 1k (section 7.1: the hierarchy of a 1k x 1k
         // map in under 1 ms); its reference averages 2k x 2k maps.
-        let mut specs: Vec<ParamSpec> = ShadowMapSettings::specs("slope")
+        let mut specs: Vec<ParamSpec> = ShadowMapSettings::specs()
             .into_iter()
             .map(|s| if s.name == "map_size" { s.with_default(ParamValue::Int(1024)) } else { s })
             .collect();
@@ -250,7 +245,7 @@ impl Method for SoftShadowBackprojection {
         specs
     }
 
-    fn params(p: &ParamSet) -> Result<BackprojectionParams> {
+    fn parse(p: &ParamSet) -> Result<BackprojectionParams> {
         Ok(BackprojectionParams {
             shadow: ShadowMapSettings::from_params(p),
             t: p.float("t") as f32,
@@ -262,6 +257,13 @@ impl Method for SoftShadowBackprojection {
             refined_contour: p.choice("coarse_contour") == "refined",
         })
     }
+}
+
+impl Method for SoftShadowBackprojection {
+    const NAME: &'static str = "backprojection";
+    const PAPER: &'static str = "soft shadow mapping by contour backprojection (Guennebaud, Barthe, Paulin 2007): \
+        min/max shadow-map hierarchy, marching-squares contours, radial area integration, light- and screen-space multi-resolution";
+    type Params = BackprojectionParams;
 
     fn cached_passes() -> &'static [CachedPass] {
         &[CENTRE_MAP, HIERARCHY, OBJECT_MAP]

@@ -6,7 +6,6 @@ use crate::frame::Frame;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
 use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::screen::ScreenPass;
@@ -23,14 +22,6 @@ impl Method for HardShadow {
     const NAME: &'static str = "hard";
     const PAPER: &'static str = "shadow mapping (Williams 1978), from the light centre";
     type Params = HardParams;
-
-    fn specs() -> Vec<ParamSpec> {
-        ShadowMapSettings::specs("slope")
-    }
-
-    fn params(set: &ParamSet) -> Result<HardParams> {
-        Ok(ShadowMapSettings::from_params(set))
-    }
 
     fn cached_passes() -> &'static [CachedPass] {
         &[CENTRE_MAP]

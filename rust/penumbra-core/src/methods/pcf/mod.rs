@@ -15,7 +15,7 @@ use crate::frame::Frame;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
 use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::samplers::{ComparisonSamplers, Filter};
@@ -46,13 +46,9 @@ pub struct PercentageCloserFiltering {
     visibility: ScreenPass,
 }
 
-impl Method for PercentageCloserFiltering {
-    const NAME: &'static str = "pcf";
-    const PAPER: &'static str = "percentage-closer filtering (Reeves et al. 1987; Cournia 3.4), fixed kernel";
-    type Params = PcfParams;
-
+impl MethodParams for PcfParams {
     fn specs() -> Vec<ParamSpec> {
-        ShadowMapSettings::specs_and("slope", [
+        ShadowMapSettings::specs_and([
             ParamSpec::float("kernel", 5.0, 0.0, 256.0, "kernel width in shadow-map texels"),
             ParamSpec::int("samples", 4, 1, 32, "taps per axis of the jittered grid"),
             ParamSpec::seed(u32::MAX as i64, "fixes the taps' jitter"),
@@ -60,7 +56,7 @@ impl Method for PercentageCloserFiltering {
         ])
     }
 
-    fn params(p: &ParamSet) -> Result<PcfParams> {
+    fn parse(p: &ParamSet) -> Result<PcfParams> {
         Ok(PcfParams {
             shadow: ShadowMapSettings::from_params(p),
             kernel: p.float("kernel") as f32,
@@ -69,6 +65,12 @@ impl Method for PercentageCloserFiltering {
             filter: Filter::from_params(p),
         })
     }
+}
+
+impl Method for PercentageCloserFiltering {
+    const NAME: &'static str = "pcf";
+    const PAPER: &'static str = "percentage-closer filtering (Reeves et al. 1987; Cournia 3.4), fixed kernel";
+    type Params = PcfParams;
 
     fn cached_passes() -> &'static [CachedPass] {
         &[CENTRE_MAP]

@@ -19,7 +19,7 @@ use crate::frame::{Frame, Intermediate};
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::pass_cache::CachedPass;
 use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::object_map::{self, OBJECT_MAP};
@@ -130,13 +130,9 @@ pub struct PercentageCloserSoftShadows {
     object_pass: VolumePass,
 }
 
-impl Method for PercentageCloserSoftShadows {
-    const NAME: &'static str = "pcss";
-    const PAPER: &'static str = "percentage-closer soft shadows (Fernando 2005): blocker search, penumbra estimate, variable PCF";
-    type Params = PcssParams;
-
+impl MethodParams for PcssParams {
     fn specs() -> Vec<ParamSpec> {
-        ShadowMapSettings::specs_and("slope", [
+        ShadowMapSettings::specs_and([
             ParamSpec::int("blocker_samples", 4, 1, 32, "taps per axis of the blocker search (at most 8 with 'poisson')"),
             ParamSpec::int("filter_samples", 6, 1, 32, "taps per axis of the filter (at most 8 with 'poisson')"),
             ParamSpec::seed(u32::MAX as i64, "fixes the taps' rotation and jitter"),
@@ -168,7 +164,7 @@ impl Method for PercentageCloserSoftShadows {
         ])
     }
 
-    fn params(p: &ParamSet) -> Result<PcssParams> {
+    fn parse(p: &ParamSet) -> Result<PcssParams> {
         let params = PcssParams {
             shadow: ShadowMapSettings::from_params(p),
             blocker_samples: p.int("blocker_samples") as u32,
@@ -197,6 +193,12 @@ impl Method for PercentageCloserSoftShadows {
         }
         Ok(params)
     }
+}
+
+impl Method for PercentageCloserSoftShadows {
+    const NAME: &'static str = "pcss";
+    const PAPER: &'static str = "percentage-closer soft shadows (Fernando 2005): blocker search, penumbra estimate, variable PCF";
+    type Params = PcssParams;
 
     fn cached_passes() -> &'static [CachedPass] {
         &[CENTRE_MAP, OBJECT_MAP]
@@ -307,7 +309,7 @@ mod tests {
         let err = crate::methods::MethodConfig::parse("pcss", &params).unwrap_err().to_string();
         assert!(err.contains("filter_samples") && err.contains("at most 8"), "{err}");
         params.insert("filter_samples".to_string(), ParamValue::Int(8));
-        let set = ParamSet::parse("pcss", &PercentageCloserSoftShadows::specs(), &params).unwrap();
-        assert_eq!(PercentageCloserSoftShadows::params(&set).unwrap().filter_samples, 8);
+        let set = ParamSet::parse("pcss", &PcssParams::specs(), &params).unwrap();
+        assert_eq!(PcssParams::parse(&set).unwrap().filter_samples, 8);
     }
 }

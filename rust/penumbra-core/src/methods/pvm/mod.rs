@@ -25,7 +25,7 @@ use crate::gpu::layout;
 use crate::gpu::pool::{Binding, Layout, PooledBuffer, PooledTexture, ResourcePool};
 use crate::light_frustum::LightProjection;
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::object_map::{self, OBJECT_MAP};
@@ -105,13 +105,9 @@ fn uint_array(binding: u32) -> wgpu::BindGroupLayoutEntry {
     layout::array_texture(binding, wgpu::TextureSampleType::Uint)
 }
 
-impl Method for PenumbraVolumeMaps {
-    const NAME: &'static str = "pvm";
-    const PAPER: &'static str = "penumbra volume maps (Cournia ch. 4)";
-    type Params = PvmParams;
-
+impl MethodParams for PvmParams {
     fn specs() -> Vec<ParamSpec> {
-        ShadowMapSettings::specs_and("slope", [
+        ShadowMapSettings::specs_and([
             ParamSpec::bool("falloff", true, "the 3k^2 - 2k^3 interpolant of 4.2 (false: the disk fraction k)"),
             OpenEdges::spec(),
             ParamSpec::choice(
@@ -123,7 +119,7 @@ impl Method for PenumbraVolumeMaps {
         ])
     }
 
-    fn params(p: &ParamSet) -> Result<PvmParams> {
+    fn parse(p: &ParamSet) -> Result<PvmParams> {
         Ok(PvmParams {
             shadow: ShadowMapSettings::from_params(p),
             falloff: p.bool("falloff"),
@@ -131,6 +127,12 @@ impl Method for PenumbraVolumeMaps {
             repairs: Repairs::parse(p.choice("repairs")),
         })
     }
+}
+
+impl Method for PenumbraVolumeMaps {
+    const NAME: &'static str = "pvm";
+    const PAPER: &'static str = "penumbra volume maps (Cournia ch. 4)";
+    type Params = PvmParams;
 
     fn cached_passes() -> &'static [CachedPass] {
         &[CENTRE_MAP, PENUMBRA_VOLUMES, OBJECT_MAP]

@@ -30,7 +30,7 @@ use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledBuffer, PooledTexture, ResourcePool};
 use crate::light_frustum::LightProjection;
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::object_map::{self, OBJECT_MAP};
@@ -188,11 +188,7 @@ pub struct PenumbraVolumeMaskFiltering {
     object_pass: VolumePass,
 }
 
-impl Method for PenumbraVolumeMaskFiltering {
-    const NAME: &'static str = "pvmf";
-    const PAPER: &'static str = "penumbra volume mask filtering (Cournia ch. 5)";
-    type Params = PvmfParams;
-
+impl MethodParams for PvmfParams {
     fn specs() -> Vec<ParamSpec> {
         // Departure from 5.5 (second-depth maps): `slope`, the default of
         // `hard`. A closed caster thinner than the depth a texel spans along
@@ -213,7 +209,7 @@ impl Method for PenumbraVolumeMaskFiltering {
         // (docs/omnidirectional.md): the unit offsets are world units,
         // whatever the scene's scale and the light's size, and the blur is
         // 12 pixels whatever the image's.
-        ShadowMapSettings::specs_and("slope", [
+        ShadowMapSettings::specs_and([
             ParamSpec::float_above("s_e", 0.02, 0.0, 1.0, "overestimation of the volumes (5.1; the paper's 0.5)"),
             ParamSpec::float("s_p", 2.0, 0.0, 100.0, "scale of the filter width w_pcf (5.2)"),
             ParamSpec::int("n_pcf", 7, 1, 32, "filter taps per axis (5.2)"),
@@ -254,7 +250,7 @@ impl Method for PenumbraVolumeMaskFiltering {
         ])
     }
 
-    fn params(p: &ParamSet) -> Result<PvmfParams> {
+    fn parse(p: &ParamSet) -> Result<PvmfParams> {
         if p.choice("estimate") == "area" && p.choice("kernel") == "square" {
             return Err(Error::InvalidParameter(
                 "pvmf: estimate='area' takes its taps on the disk the light projects to; kernel='square' does not apply (use kernel='disk')".to_owned(),
@@ -278,6 +274,12 @@ impl Method for PenumbraVolumeMaskFiltering {
             repairs: Repairs::parse(p.choice("repairs")),
         })
     }
+}
+
+impl Method for PenumbraVolumeMaskFiltering {
+    const NAME: &'static str = "pvmf";
+    const PAPER: &'static str = "penumbra volume mask filtering (Cournia ch. 5)";
+    type Params = PvmfParams;
 
     fn cached_passes() -> &'static [CachedPass] {
         &[CENTRE_MAP, MASK, ESTIMATION, OBJECT_MAP]

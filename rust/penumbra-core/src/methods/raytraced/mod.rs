@@ -43,7 +43,7 @@ use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::light_sampling::{light_samples, scene_sphere_samples, SampleUniform, DEFAULT_RAY_OFFSET};
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
 
 use acceleration::AccelerationCache;
@@ -109,12 +109,7 @@ pub struct RaytracedShadows {
     cache: AccelerationCache,
 }
 
-impl Method for RaytracedShadows {
-    const NAME: &'static str = "raytraced";
-    const PAPER: &'static str = "shadow rays through wgpu ray queries (beyond the papers): the in-engine exact visibility, \
-        with reference's sphere sampling";
-    type Params = RaytracedParams;
-
+impl MethodParams for RaytracedParams {
     fn specs() -> Vec<ParamSpec> {
         vec![
             ParamSpec::int("n_samples", 256, 1, 65536, "shadow rays per pixel, one per light sample of reference's sphere sampling (rounded up to full stratified grids)"),
@@ -132,7 +127,7 @@ impl Method for RaytracedShadows {
         ]
     }
 
-    fn params(p: &ParamSet) -> Result<RaytracedParams> {
+    fn parse(p: &ParamSet) -> Result<RaytracedParams> {
         let params = RaytracedParams {
             n_samples: p.int("n_samples") as u32,
             seed: p.int("seed") as u64,
@@ -149,6 +144,13 @@ impl Method for RaytracedShadows {
         }
         Ok(params)
     }
+}
+
+impl Method for RaytracedShadows {
+    const NAME: &'static str = "raytraced";
+    const PAPER: &'static str = "shadow rays through wgpu ray queries (beyond the papers): the in-engine exact visibility, \
+        with reference's sphere sampling";
+    type Params = RaytracedParams;
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         // Reads the scene, the settings and the samples; writes the coarse

@@ -40,7 +40,7 @@ use crate::gpu::pool::PooledTexture;
 use crate::light_frustum::{light_sample_error, LightProjection};
 use crate::light_sampling::{camera_basis, light_samples, scene_axis, scene_sphere_samples, LightSample, Strata};
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
@@ -93,13 +93,9 @@ pub struct ReferenceShadows {
     pass: ScreenPass,
 }
 
-impl Method for ReferenceShadows {
-    const NAME: &'static str = "reference";
-    const PAPER: &'static str = "accumulation of hard shadows from n light samples (Herf 3.4, 4.2; Schwarzler et al. Eq. 1-2)";
-    type Params = ReferenceParams;
-
+impl MethodParams for ReferenceParams {
     fn specs() -> Vec<ParamSpec> {
-        ShadowMapSettings::specs_and("slope", [
+        ShadowMapSettings::specs_and([
             ParamSpec::int("n_samples", 256, 1, 4096, "light samples (rounded up to a full stratified grid)"),
             ParamSpec::seed(i64::MAX, "fixes the samples' jitter"),
             ParamSpec::choice(
@@ -112,7 +108,7 @@ impl Method for ReferenceShadows {
         ])
     }
 
-    fn params(p: &ParamSet) -> Result<ReferenceParams> {
+    fn parse(p: &ParamSet) -> Result<ReferenceParams> {
         Ok(ReferenceParams {
             shadow: ShadowMapSettings::from_params(p),
             n_samples: p.int("n_samples") as u32,
@@ -121,6 +117,12 @@ impl Method for ReferenceShadows {
             jitter: p.bool("jitter"),
         })
     }
+}
+
+impl Method for ReferenceShadows {
+    const NAME: &'static str = "reference";
+    const PAPER: &'static str = "accumulation of hard shadows from n light samples (Herf 3.4, 4.2; Schwarzler et al. Eq. 1-2)";
+    type Params = ReferenceParams;
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         let bindings = [layout::depth_array, layout::parameters, layout::storage_buffer_rw, layout::visibility_storage, layout::parameters];

@@ -48,7 +48,7 @@ use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::light_sampling::{scene_sphere_samples, LightSample, SampleUniform, DEFAULT_RAY_OFFSET};
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::passes::screen::ScreenPass;
 
 /// Pixels per tile side and tiles per group side (masks.wgsl's TILE, GROUP).
@@ -155,12 +155,7 @@ pub struct TriangleMasks {
     pass: ScreenPass,
 }
 
-impl Method for TriangleMasks {
-    const NAME: &'static str = "triangle_masks";
-    const PAPER: &'static str = "per-triangle light-sample masks (Sintorn, Eisemann & Assarsson 2008, section 3), \
-        exact at reference's sphere samples, without ray queries";
-    type Params = TriangleMaskParams;
-
+impl MethodParams for TriangleMaskParams {
     fn specs() -> Vec<ParamSpec> {
         vec![
             ParamSpec::int("n_samples", 256, 1, 4096, "light samples of reference's sphere sampling, one mask bit each (rounded up to full stratified grids)"),
@@ -176,7 +171,7 @@ impl Method for TriangleMasks {
         ]
     }
 
-    fn params(p: &ParamSet) -> Result<TriangleMaskParams> {
+    fn parse(p: &ParamSet) -> Result<TriangleMaskParams> {
         Ok(TriangleMaskParams {
             n_samples: p.int("n_samples") as u32,
             seed: p.int("seed") as u64,
@@ -184,6 +179,13 @@ impl Method for TriangleMasks {
             binning: p.bool("binning"),
         })
     }
+}
+
+impl Method for TriangleMasks {
+    const NAME: &'static str = "triangle_masks";
+    const PAPER: &'static str = "per-triangle light-sample masks (Sintorn, Eisemann & Assarsson 2008, section 3), \
+        exact at reference's sphere samples, without ray queries";
+    type Params = TriangleMaskParams;
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         // Reads the settings, the samples and the triangles; writes bounds,

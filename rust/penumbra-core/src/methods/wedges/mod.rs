@@ -40,7 +40,7 @@ use crate::frame::{Frame, Intermediate};
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, PooledBuffer};
 use crate::method::{Method, MethodOutput};
-use crate::params::{ParamSet, ParamSpec};
+use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::object_map::{self, OBJECT_MAP};
@@ -138,13 +138,9 @@ pub struct PenumbraWedges {
     object_pass: VolumePass,
 }
 
-impl Method for PenumbraWedges {
-    const NAME: &'static str = "wedges";
-    const PAPER: &'static str = "penumbra wedges (Akenine-Möller & Assarsson 2002, 4.1-4.2; per-pixel coverage of Assarsson & Akenine-Möller 2003)";
-    type Params = WedgesParams;
-
+impl MethodParams for WedgesParams {
     fn specs() -> Vec<ParamSpec> {
-        ShadowMapSettings::specs_and("slope", [
+        ShadowMapSettings::specs_and([
             ParamSpec::int(
                 "acute_wedges",
                 0,
@@ -187,7 +183,7 @@ impl Method for PenumbraWedges {
         ])
     }
 
-    fn params(p: &ParamSet) -> Result<WedgesParams> {
+    fn parse(p: &ParamSet) -> Result<WedgesParams> {
         let level = p.choice("repairs");
         let repairs = match level {
             "all" => Repairs { cone: true, hidden: true, horizon: true, centre: false, distance: false },
@@ -205,6 +201,12 @@ impl Method for PenumbraWedges {
             independent_occluders: p.choice("occluders") == "independent",
         })
     }
+}
+
+impl Method for PenumbraWedges {
+    const NAME: &'static str = "wedges";
+    const PAPER: &'static str = "penumbra wedges (Akenine-Möller & Assarsson 2002, 4.1-4.2; per-pixel coverage of Assarsson & Akenine-Möller 2003)";
+    type Params = WedgesParams;
 
     fn cached_passes() -> &'static [CachedPass] {
         &[CENTRE_MAP, PENUMBRA_WEDGES, OBJECT_MAP]
