@@ -616,20 +616,31 @@ impl Method for AdaptiveShadows {
 mod tests {
     use super::*;
 
+    /// The quadtree with every cell split down to `depth`.
+    fn full_tree(depth: u32) -> Quadtree {
+        let mut tree = Quadtree::new(depth);
+        let mut cells = vec![Quadtree::root()];
+        for _ in 0..depth {
+            cells = cells.into_iter().flat_map(|c| tree.split(c)).collect();
+        }
+        tree
+    }
+
+    /// The tree's points on the unit square, bit for bit.
+    fn unit_bits(tree: &Quadtree) -> Vec<(u64, u64)> {
+        tree.points().iter().map(|&p| tree.unit(p)).map(|u| (u.x.to_bits(), u.y.to_bits())).collect()
+    }
+
     #[test]
     fn a_full_quadtree_is_the_regular_grid_with_equal_weights() {
         for depth in 0..=4u32 {
-            let mut tree = Quadtree::new(depth);
-            let mut cells = vec![Quadtree::root()];
-            for _ in 0..depth {
-                cells = cells.into_iter().flat_map(|c| tree.split(c)).collect();
-            }
+            let tree = full_tree(depth);
             let side = (1usize << depth) + 1;
             assert_eq!(tree.points().len(), side * side, "depth {depth}");
             let w = tree.weights();
             assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
             assert!(w.iter().all(|x| (x - 1.0 / (side * side) as f64).abs() < 1e-15), "Eq. 3 at one depth: equal weights");
-            let mut units: Vec<(u64, u64)> = tree.points().iter().map(|&p| tree.unit(p)).map(|u| (u.x.to_bits(), u.y.to_bits())).collect();
+            let mut units = unit_bits(&tree);
             units.sort_unstable();
             units.dedup();
             assert_eq!(units.len(), side * side, "each point once");
@@ -663,12 +674,7 @@ mod tests {
     fn the_full_grid_is_references_regular_grid() {
         use crate::light_sampling::{jittered_grid, Strata};
         for depth in 0..=4u32 {
-            let mut tree = Quadtree::new(depth);
-            let mut cells = vec![Quadtree::root()];
-            for _ in 0..depth {
-                cells = cells.into_iter().flat_map(|c| tree.split(c)).collect();
-            }
-            let mut ours: Vec<(u64, u64)> = tree.points().iter().map(|&p| tree.unit(p)).map(|u| (u.x.to_bits(), u.y.to_bits())).collect();
+            let mut ours = unit_bits(&full_tree(depth));
             let side = (1u32 << depth) + 1;
             let mut grid: Vec<(u64, u64)> = jittered_grid(side * side, Strata::Centred).iter().map(|u| (u.x.to_bits(), u.y.to_bits())).collect();
             ours.sort_unstable();
