@@ -181,6 +181,34 @@ pub fn pipeline_layout(
     })
 }
 
+/// A render pipeline over one bind group whose vertex and fragment stages
+/// are the entry points `(vs, fs)` of `module`: `buffers` in, `targets` and
+/// `depth_stencil` out, one sample, default compilation options.
+#[allow(clippy::too_many_arguments)]
+pub fn render_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    module: &wgpu::ShaderModule,
+    (vs, fs): (&str, &str),
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+    primitive: wgpu::PrimitiveState,
+    depth_stencil: Option<wgpu::DepthStencilState>,
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&pipeline_layout(device, label, layout)),
+        vertex: wgpu::VertexState { module, entry_point: Some(vs), compilation_options: Default::default(), buffers },
+        primitive,
+        depth_stencil,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState { module, entry_point: Some(fs), compilation_options: Default::default(), targets }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// A compute pipeline over one bind group, entry point `main`.
 pub fn compute_pipeline(
     device: &wgpu::Device,

@@ -27,31 +27,20 @@ impl GBufferPass {
         let layout = pool.layout(device, "gbuffer::layout", &[layout::uniform(0)]);
         let module = crate::shaders::module(device, "gbuffer::shader", crate::shader!("gbuffer.wgsl"));
         let buffers = [Some(super::corner_layout(&super::CORNER_ATTRIBUTES))];
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("gbuffer::pipeline"),
-            layout: Some(&layout::pipeline_layout(device, "gbuffer::pipeline_layout", &layout)),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &buffers,
-            },
-            primitive: wgpu::PrimitiveState {
-                // Back faces are drawn too: they are shaded dark (one-sided surfaces).
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: layout::nearest_depth(formats::DEPTH),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(formats::POSITION.into()), Some(formats::NORMAL.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        // Back faces are drawn too: they are shaded dark (one-sided surfaces).
+        let primitive = wgpu::PrimitiveState { cull_mode: None, ..Default::default() };
+        let targets = [Some(formats::POSITION.into()), Some(formats::NORMAL.into())];
+        let pipeline = layout::render_pipeline(
+            device,
+            "gbuffer::pipeline",
+            &layout,
+            &module,
+            ("vs_main", "fs_main"),
+            &buffers,
+            primitive,
+            layout::nearest_depth(formats::DEPTH),
+            &targets,
+        );
         Self { pipeline, layout }
     }
 

@@ -50,65 +50,35 @@ impl ShadowMapPass {
     pub fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         let layout = pool.layout(device, "shadow_map::layout", &[layout::uniform(0)]);
         let module = crate::shaders::module(device, "shadow_map::shader", crate::shader!("shadow_map.wgsl"));
-        let pipeline_layout = layout::pipeline_layout(device, "shadow_map::pipeline_layout", &layout);
         let position_only = [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }];
-        let positions = wgpu::VertexBufferLayout { array_stride: 12, step_mode: wgpu::VertexStepMode::Vertex, attributes: &position_only };
+        let positions = [Some(wgpu::VertexBufferLayout { array_stride: 12, step_mode: wgpu::VertexStepMode::Vertex, attributes: &position_only })];
         let pipeline = |label: &str, cull_mode: Option<wgpu::Face>| {
-            let buffers = [Some(positions.clone())];
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &buffers,
-                },
-                primitive: wgpu::PrimitiveState { cull_mode, ..Default::default() },
-                depth_stencil: layout::nearest_depth(formats::DEPTH),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            let primitive = wgpu::PrimitiveState { cull_mode, ..Default::default() };
+            layout::render_pipeline(device, label, &layout, &module, ("vs_main", "fs_main"), &positions, primitive, layout::nearest_depth(formats::DEPTH), &[])
         };
         let midpoint_layout = pool.layout(
             device,
             "shadow_map::midpoint_layout",
             &[layout::depth_texture(0), layout::depth_texture(1)],
         );
-        let midpoint = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadow_map::midpoint_pipeline"),
-            layout: Some(&layout::pipeline_layout(device, "shadow_map::midpoint_pipeline_layout", &midpoint_layout)),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: formats::DEPTH,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_midpoint"),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            multiview_mask: None,
-            cache: None,
+        let always = Some(wgpu::DepthStencilState {
+            format: formats::DEPTH,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
         });
+        let midpoint = layout::render_pipeline(
+            device,
+            "shadow_map::midpoint_pipeline",
+            &midpoint_layout,
+            &module,
+            ("vs_fullscreen", "fs_midpoint"),
+            &[],
+            Default::default(),
+            always,
+            &[],
+        );
         Self {
             first_depth: pipeline("shadow_map::first_depth_pipeline", None),
             second_depth: pipeline("shadow_map::second_depth_pipeline", Some(wgpu::Face::Front)),

@@ -39,18 +39,9 @@ impl VolumePass {
             attributes,
         })];
         let targets: Vec<_> = targets.iter().map(|&f| Some(f.into())).collect();
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(name),
-            layout: Some(&layout::pipeline_layout(device, name, &layout)),
-            vertex: wgpu::VertexState { module: &module, entry_point: Some(vs), compilation_options: Default::default(), buffers: &buffers },
-            // Both sides of every quadrilateral: the volume nearest the light, whichever way it faces.
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: layout::nearest_depth(formats::DEPTH),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState { module: &module, entry_point: Some(fs), compilation_options: Default::default(), targets: &targets }),
-            multiview_mask: None,
-            cache: None,
-        });
+        // Both sides of every quadrilateral: the volume nearest the light, whichever way it faces.
+        let primitive = wgpu::PrimitiveState { cull_mode: None, ..Default::default() };
+        let pipeline = layout::render_pipeline(device, name, &layout, &module, (vs, fs), &buffers, primitive, layout::nearest_depth(formats::DEPTH), &targets);
         Self { name, pipeline, layout }
     }
 
