@@ -153,7 +153,9 @@ MEASURED: dict[str, dict[str, float]] = {
     # misses issue 28's bar on 5 scenes, as the default does (7 with the
     # plane test), noisier at the median.
     "pcss area": {"median": 0.0805, "worst": 0.1835, "median_stray": 0.0004, "worst_stray": 0.0231},
-    "backprojection": {"median": 0.048, "worst": 0.157, "median_stray": 0.0004, "worst_stray": 0.0113},
+    # Kernels crossing a cube face go down at most 2 kernel caps since issue
+    # 30 (4 before: 0.0461 / 0.1431, at up to 15x `hard`'s time).
+    "backprojection": {"median": 0.0471, "worst": 0.1468, "median_stray": 0.0004, "worst_stray": 0.0107},
     "pvm": {"median": 0.134, "worst": 0.189, "median_stray": 0.0014, "worst_stray": 0.0145},
     # The defaults since issue 31 (the disk kernel, no blur, radius offsets,
     # the umbra skipped, s_e 0.02: "pvmf recommended" before), the same with
