@@ -9,6 +9,7 @@ import io
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import penumbra.grid
@@ -273,6 +274,28 @@ def _rows(scenes_: dict[str, list[tuple[str, dict, float, float]]]) -> list[dict
     ]
 
 
+def test_cost_tables_fit_how_the_methods_own_passes_follow_penumbra_and_triangles() -> None:
+    rng = np.random.default_rng(3)
+    rows = []
+    for i in range(12):
+        px, tris = float(rng.integers(100, 5000)), float(rng.integers(1000, 100000))
+        # Own passes: 0.02 ms per penumbra pixel times sqrt(triangles) / 100;
+        # the shared passes (G-buffer, shadow map, readback) are left out.
+        own = 0.02 * px * (tris ** 0.5) / 100.0
+        rows.append({"scene": f"s{i}", "size": "8x8", "method": "m", "label": "default", "total_ms": own + 50.0,
+                     "ms_gbuffer": 10.0, "ms_shadow_map": 30.0, "ms_readback": 10.0, "ms_mask": 0.25 * own, "ms_visibility": 0.75 * own,
+                     "penumbra_pixels": px, "stat_triangles": tris})
+    rows.append({"scene": "s0", "size": "8x8", "method": "mitsuba", "label": "spp=4", "total_ms": 1.0})
+    line = next(l for l in bench.cost_tables(rows).splitlines() if l.startswith("| m |"))
+    cells = [c.strip() for c in line.strip("|").split("|")]
+    assert cells[2] == "12" and cells[3] == "30.0", cells
+    assert (cells[6], cells[7], cells[8]) == ("1.00", "0.50", "1.00"), "the exponents of the cost model, exactly"
+    assert cells[9].startswith("visibility ("), "the costliest own pass"
+    assert "| mitsuba |" not in bench.cost_tables(rows)
+    few = bench.cost_tables(rows[:3])
+    assert "| m | default | 3 |" in few and "| - | - | - |" in few, "no fit on fewer than 5 scenes"
+
+
 def test_time_to_error_splits_curves_and_takes_means_or_medians() -> None:
     mitsuba = [("mitsuba", {"spp": 4}, 10.0, 0.4), ("mitsuba", {"spp": 16}, 40.0, 0.1)]
     rows = _rows({
@@ -299,7 +322,7 @@ def test_report_rewrites_the_tables_from_results_csv_without_rendering(tmp_path:
     bench.write_csv(tmp_path / "results.csv", rows)
     assert bench.read_csv(tmp_path / "results.csv")[0]["total_ms"] == 2.0, "numbers come back as numbers"
     assert cli.main(["bench", "--config", str(tmp_path / "c.toml"), "--out", str(tmp_path), "--report"]) == 0
-    for name in ("suite.md", "pareto.md", "ratios.md", "table.md", "time_to_error.md", "pareto.png"):
+    for name in ("suite.md", "pareto.md", "ratios.md", "cost.md", "table.md", "time_to_error.md", "pareto.png"):
         assert (tmp_path / name).stat().st_size > 0, name
     assert "| hard | ≥ 2.0 | ~ 1.00 |\n| mitsuba | 2.0 | 1.00 |" in (tmp_path / "time_to_error.md").read_text(), "Mitsuba at 0.2: halfway, log-log"
     assert not (tmp_path / "machine.md").exists(), "nothing rendered"

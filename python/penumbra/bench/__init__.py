@@ -20,6 +20,10 @@ Written to ``--out`` (default ``benchmarks/results/<config name>``):
 - ``pareto.md``: the Pareto-optimal settings of each method;
 - ``ratios.md``: each method's time over ``hard``'s, and its best setting's
   time over the time ``reference`` and Mitsuba need for the same error;
+- ``cost.md``: whether each setting's cost follows the penumbra: the
+  median time of the shadow map and of the method's own passes, per 1000
+  penumbra pixels, and the exponents of a log-log fit of its own passes'
+  time against penumbra pixels and triangles over the scenes;
 - ``scaling.csv`` and ``scaling.png``: cost against image size and against
   penumbra area on screen (a light-radius sweep);
 - ``table.md`` (with a ``table`` list of columns): one line per scene and

@@ -28,6 +28,7 @@ __all__ = [
     "markdown_table",
     "read_csv",
     "time_to_error_tables",
+    "cost_tables",
     "BUDGETS",
 ]
 
@@ -283,6 +284,69 @@ def suite_tables(rows: list[dict[str, Any]]) -> str:
             over = [float(r["time_over_hard"]) for r in g]
             out.append(f"| {method} | {lab} | {np.median(err):.4f} | {max(err):.4f} | {half} of {len(g)} | {np.median(stray):.2f} | {max(stray):.2f} | "
                        f"{sum(x > 0.5 for x in stray)} | {np.median(over):.2f} | {max(over):.2f} | {'-' if method == 'mitsuba' else _median_ratio(g)} |")
+        out.append("")
+    return "\n".join(out)
+
+
+#: Passes every shadow-map method shares, and the ones after the method's
+#: own: what `cost_tables` leaves out of "the method's own passes".
+SHARED_PASSES = ("ms_gbuffer", "ms_shadow_map", "ms_shading", "ms_readback", "ms_radiance")
+
+
+def _number(row: dict[str, Any], key: str) -> float:
+    value = row.get(key)
+    try:
+        return float(value) if value not in (None, "") else math.nan
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def cost_tables(rows: list[dict[str, Any]]) -> str:
+    """Whether each method's cost follows the penumbra (issue 30): per size
+    and setting, over the scenes, the median time of the shadow map and of
+    the method's own passes (the sum of its passes' times but the G-buffer,
+    the shadow map, shading and readback), that per 1000 penumbra pixels, and the exponents of a
+    least-squares fit of log(own ms) = c + a log(penumbra pixels) + b
+    log(triangles) with its R^2: a near 1 and b near 0 say the work follows
+    the penumbra on screen, not the mesh. The costliest own pass and its
+    median close each row. Settings with fewer than 5 scenes that have a
+    penumbra and a triangle count get no fit."""
+    out: list[str] = []
+    by_size: dict[str, list[tuple[str, str, list[dict[str, Any]]]]] = {}
+    for (size, method, lab), group in _groups(rows).items():
+        if method != "mitsuba":
+            by_size.setdefault(size, []).append((method, lab, group))
+    for size, entries in by_size.items():
+        out += [f"### {size}", "",
+                "| method | setting | scenes | shadow map ms | own passes ms | own ms per 1000 penumbra px "
+                "| exponent on penumbra px | exponent on triangles | R^2 | costliest own pass (median ms) |",
+                "|---|---|---|---|---|---|---|---|---|---|"]
+        for method, lab, group in entries:
+            own, px, tris, shadow = [], [], [], []
+            passes: dict[str, list[float]] = {}
+            for r in group:
+                mine = [_number(r, k) for k in r if k.startswith("ms_") and k not in SHARED_PASSES]
+                own.append(max(sum(v for v in mine if math.isfinite(v)), 1e-3))
+                px.append(_number(r, "penumbra_pixels"))
+                tris.append(_number(r, "stat_triangles"))
+                shadow.append(_number(r, "ms_shadow_map"))
+                for k, v in r.items():
+                    if k.startswith("ms_") and k not in SHARED_PASSES and math.isfinite(_number(r, k)):
+                        passes.setdefault(k[3:], []).append(float(v))
+            fit_rows = [(o, p, t) for o, p, t in zip(own, px, tris) if p > 0 and t > 0 and math.isfinite(o)]
+            per_k = [1000 * o / p for o, p, _ in fit_rows]
+            a = b = r2 = "-"
+            if len(fit_rows) >= 5:
+                y = np.log([o for o, _, _ in fit_rows])
+                x = np.column_stack([np.ones(len(fit_rows)), np.log([p for _, p, _ in fit_rows]), np.log([t for _, _, t in fit_rows])])
+                coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+                spread = float(np.sum((y - y.mean()) ** 2))
+                r2_value = 1.0 - float(np.sum((y - x @ coef) ** 2)) / spread if spread > 0 else 1.0
+                a, b, r2 = f"{coef[1]:.2f}", f"{coef[2]:.2f}", f"{r2_value:.2f}"
+            costliest = max(passes.items(), key=lambda kv: float(np.median(kv[1])), default=None)
+            worst = f"{costliest[0]} ({np.median(costliest[1]):.1f})" if costliest else "-"
+            out.append(f"| {method} | {lab} | {len(group)} | {_median(shadow):.1f} | {_median(own):.1f} | "
+                       f"{_median(per_k):.2f} | {a} | {b} | {r2} | {worst} |")
         out.append("")
     return "\n".join(out)
 
