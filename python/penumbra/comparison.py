@@ -87,7 +87,7 @@ class Timing:
 #: measure beside the defaults (docs/methods/pvmf.md). The repairs for real
 #: meshes (``repairs``, ``bias``, ``blur_min_width``) keep their defaults here.
 PAPER: dict[str, dict[str, Any]] = {
-    "pvmf": {"kernel": "square", "n_blur": 12, "offsets": "unit", "umbra": "filter", "s_e": 0.5},
+    "pvmf": {"kernel": "square", "n_blur": 12, "offsets": "unit", "umbra": "filter", "s_e": 0.5, "mask_size": "map"},
 }
 
 

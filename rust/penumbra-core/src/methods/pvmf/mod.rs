@@ -92,6 +92,10 @@ pub struct PvmfParams {
     pub behind: bool,
     /// Filter pixels that fail the shadow-map test outside every volume (5.2).
     pub filter_umbra: bool,
+    /// Render the mask at the size the image needs (`mask_size = "auto"`,
+    /// `crate::map_size`'s pixel criterion, at most the map's) rather than
+    /// at the shadow map's (`"map"`, the paper's).
+    pub mask_auto: bool,
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`: `hidden`, `horizon` and `distance` apply).
     pub repairs: Repairs,
@@ -151,7 +155,7 @@ pub fn blurs(params: &PvmfParams, radius: f64) -> bool {
 
 /// What pass 2 reads besides the geometry: the light, the projection, the
 /// map size and the volume parameters (appended to the pass-cache key).
-pub fn mask_key(params: &PvmfParams, projection: &LightProjection, (l, r): (DVec3, f64), key: &mut PassKey) {
+pub fn mask_key(params: &PvmfParams, projection: &LightProjection, (l, r): (DVec3, f64), mask_size: u32, key: &mut PassKey) {
     let offsets = if params.offsets == Offsets::Unit { "unit" } else { "radius" };
     key.f64s(&l.to_array())
         .f64s(&[r, params.s_e])
@@ -159,7 +163,23 @@ pub fn mask_key(params: &PvmfParams, projection: &LightProjection, (l, r): (DVec
         .bytes(params.open_edges.name().as_bytes())
         .bytes(&[u8::from(params.repairs.hidden), u8::from(params.repairs.distance)])
         .projection(projection)
-        .u32(params.shadow.map_size);
+        .u32(params.shadow.map_size)
+        .u32(mask_size);
+}
+
+/// The mask's side in texels: the map's, or with `mask_size = "auto"` the
+/// size at which one of its texels projects onto no visible receiver wider
+/// than a pixel (`map_size::auto_map_size`), at most the map's. The mask is
+/// read only at the receivers' own projections (the volume test and d_o's
+/// taps), so a texel per pixel resolves what the image shows of it; its
+/// fill, the volumes' area in texels, is most of the method's cost where
+/// the volumes are large in the light's view (issue 30).
+pub fn mask_size(params: &PvmfParams, projection: &LightProjection, ctx: &crate::frame::FrameContext<'_>) -> u32 {
+    let map = params.shadow.map_size;
+    if !params.mask_auto {
+        return map;
+    }
+    crate::map_size::auto_map_size(projection, ctx.camera, ctx.prepared, ctx.max_texture_side()).min(map)
 }
 
 /// The uniform blocks of pass 3.
@@ -240,6 +260,14 @@ impl MethodParams for PvmfParams {
                 "which failing taps hide the light: plane (5.2: a texel nearer the light than the receiver's plane), behind (and the receiver lies behind the texel's own surface: walls and floors beside a receiver hide nothing)",
             ),
             ParamSpec::choice("umbra", "skip", &["filter", "skip"], "pixels failing the test outside every volume: filter them (5.2, the paper) or give them 0"),
+            // Departure from 5.1, whose mask is the shadow map's size (issue
+            // 30): `mask_size` below.
+            ParamSpec::choice(
+                "mask_size",
+                "auto",
+                &["map", "auto"],
+                "the penumbra volume mask's resolution: the shadow map's (5.1), or auto: a texel per pixel on the visible receivers (map_size's criterion), at most the map's",
+            ),
             OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
@@ -270,6 +298,7 @@ impl MethodParams for PvmfParams {
             area_estimate: p.choice("estimate") == "area",
             behind: p.choice("blocker_test") == "behind",
             filter_umbra: p.choice("umbra") == "filter",
+            mask_auto: p.choice("mask_size") == "auto",
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
         })
@@ -312,14 +341,15 @@ impl Method for PenumbraVolumeMaskFiltering {
         let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
         let light = frame.ctx.light;
         let (l, r) = (light.center, light.radius);
+        let mask_size = self::mask_size(params, &projection, &frame.ctx);
         let mut mask_key = PassKey::new(MASK.name);
         mask_key.bytes(&frame.ctx.geometry);
-        self::mask_key(params, &projection, (l, r), &mut mask_key);
+        self::mask_key(params, &projection, (l, r), mask_size, &mut mask_key);
         let mask_key = mask_key.finish();
         let mut fresh_mask = false;
         let mask = frame.cached(MASK.name, mask_key.clone(), |frame| {
             fresh_mask = true;
-            self.record_mask(frame, params, &projection).map(Arc::new)
+            self.record_mask(frame, params, &projection, mask_size).map(Arc::new)
         })?;
         // The estimate reads the G-buffer, the shadow map and the mask (their
         // keys), and its own uniforms: everything but n_blur.
@@ -380,6 +410,7 @@ impl Method for PenumbraVolumeMaskFiltering {
         let s = &mask.stats;
         frame.silhouette_stats(&s.silhouette, mask.silhouette_cache_hits, fresh_mask);
         frame.stat("mask_quads", s.mask_quads as i64);
+        frame.stat("mask_size", i64::from(mask_size));
         frame.counters(&counters, &COUNTERS);
         frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth, projection.far()));
         frame.intermediate(Intermediate::color("pvmf_edge_distance", &mask.edge_distance, 1));
@@ -392,8 +423,7 @@ impl Method for PenumbraVolumeMaskFiltering {
 
 impl PenumbraVolumeMaskFiltering {
     /// Pass 2: builds and renders the penumbra volume mask (5.1).
-    fn record_mask(&self, frame: &mut Frame<'_>, params: &PvmfParams, projection: &LightProjection) -> Result<PvmfMask> {
-        let map = params.shadow.map_size;
+    fn record_mask(&self, frame: &mut Frame<'_>, params: &PvmfParams, projection: &LightProjection, map: u32) -> Result<PvmfMask> {
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
         // d_e = 0 (the clear value) marks texels without a volume.
         let edge_distance = frame.ctx.light_texture("pvmf::edge_distance", map, projection.layers(), DISTANCE_FORMAT, usage);
