@@ -100,7 +100,8 @@ def test_stats_intermediates_and_caches(renderer: penumbra.Renderer) -> None:
     assert resized.reused_passes == ["gbuffer"]
     for key in ("pvm_volume_depth", "pvm_edge0", "pvm_edge1", "pvm_in_volume", "shadow_map"):
         assert key in first.images
-    assert first.images["pvm_edge0"].shape == (512, 512, 3)
+    side = first.stats["volume_map_size"]
+    assert side <= 512 and first.images["pvm_edge0"].shape == (side, side, 3), "the volume map's own size (volume_map_size)"
     assert first.stats["pixels_in_volume"] == int(first["pvm_in_volume"].sum()) > 0
     # One topology and one silhouette per scene (connectivity spans its meshes).
     assert resized.stats["silhouette_cache_hits"] == 1
@@ -233,3 +234,21 @@ def test_a_receiver_whose_horizon_cuts_the_light_sees_the_part_above_it(renderer
         paper = renderer.render(scene, method, repairs=levels[1])
         assert (paper.visibility[front] == 0.0).all(), method
 
+
+
+def test_the_automatic_volume_map_size_is_at_most_the_maps_and_moves_few_pixels(renderer: penumbra.Renderer) -> None:
+    """volume_map_size="auto" (an option): a texel per pixel on the visible
+    receivers, at most the map's. On the default scene at 96x96 it moves few
+    pixels (measured: none by more than 0.1, the mean by 1e-5; on the
+    generated scenes up to 0.22%, docs/methods/pvm.md)."""
+    scene = penumbra.scenes.get(width=96, height=96)
+    auto = renderer.render(scene, "pvm", outputs=["visibility"], volume_map_size="auto")
+    full = renderer.render(scene, "pvm", outputs=["visibility"])
+    assert full.stats["volume_map_size"] == full.stats["map_size"] == 2048
+    assert auto.stats["volume_map_size"] <= 512
+    d = np.abs(auto.visibility - full.visibility)
+    assert (d > 0.1).mean() <= 0.001 and d.mean() <= 0.0005, ((d > 0.1).mean(), d.mean())
+    small = renderer.render(scene, "pvm", outputs=["visibility"], volume_map_size="auto", map_size=256)
+    assert small.stats["volume_map_size"] == 256
+    with pytest.raises(penumbra.ParameterError, match="volume_map_size"):
+        renderer.render(scene, "pvm", volume_map_size="half")

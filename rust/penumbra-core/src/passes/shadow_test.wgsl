@@ -52,6 +52,19 @@ fn map_point_depth(ls: LightSpace, map: texture_depth_2d_array, m: MapPoint) -> 
     return textureLoad(map, map_texel(textureDimensions(map), m), m.layer, 0) * ls.depth.y;
 }
 
+// Map point `m` in a light-space image of `dims` texels that is read only
+// at the receivers' projections (pvm's volume map, pvmf's mask): the map's
+// coordinates scaled. Such an image is the map's size, or smaller where a
+// texel per pixel serves (`map_size::receiver_image_size`).
+fn map_point_in(ls: LightSpace, m: MapPoint, dims: vec2<u32>) -> MapPoint {
+    return MapPoint(m.layer, m.coords * (f32(dims.x) / ls.depth.z));
+}
+
+// World-unit depth stored in such a linear-depth image at the texel over `q`.
+fn image_depth(t: ShadowTest, image: texture_depth_2d_array, q: vec3<f32>) -> f32 {
+    return map_point_depth(t.light_space, image, map_point_in(t.light_space, light_map_point(t.light_space, q), textureDimensions(image)));
+}
+
 // World-unit depth stored in a linear-depth map at the texel over `q`.
 fn map_depth(t: ShadowTest, map: texture_depth_2d_array, q: vec3<f32>) -> f32 {
     return map_point_depth(t.light_space, map, light_map_point(t.light_space, q));

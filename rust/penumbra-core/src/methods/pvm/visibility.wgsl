@@ -100,9 +100,10 @@ fn shade(pixel: ScreenPixel) {
             let centre_lit = q.w <= map_depth(pvm, shadow_map, q.xyz);
             v = select(0.0, 1.0, centre_lit);
             // Listing 4.2: in a volume when the PVDM is nearer the light than the pixel.
-            if (map_depth(pvm, volume_depth, q.xyz) < q.w) {
-                let m = light_map_point(pvm.light_space, q.xyz);
-                let t = map_texel(textureDimensions(edge_index), m);
+            if (image_depth(pvm, volume_depth, q.xyz) < q.w) {
+                let dims = textureDimensions(edge_index);
+                let m = map_point_in(pvm.light_space, light_map_point(pvm.light_space, q.xyz), dims);
+                let t = map_texel(dims, m);
                 // The depth map and the index map are written together: a
                 // texel behind a volume holds an index (clamped all the same).
                 let edge = edges[min(max(textureLoad(edge_index, t, m.layer, 0).x, 1u) - 1u, arrayLength(&edges) - 1u)];

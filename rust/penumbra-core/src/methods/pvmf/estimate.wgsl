@@ -46,12 +46,6 @@ var<private> settings: PvmfSettings;
 // no volume is near (an umbra pixel outside every volume), the occluder's
 // distance is read from the shadow map instead: the stored depth along the
 // receiver's light ray.
-// Map point `m` in a mask of `dims` texels: the map's coordinates scaled
-// (the mask is the map's size, or smaller with mask_size = "auto").
-fn in_mask(m: MapPoint, dims: vec2<u32>) -> MapPoint {
-    return MapPoint(m.layer, m.coords * (f32(dims.x) / pvmf.light_space.depth.z));
-}
-
 fn occluder_distance(r: Receiver) -> f32 {
     let ls = pvmf.light_space;
     let centre = vec2<i32>(floor(r.coords));
@@ -64,7 +58,7 @@ fn occluder_distance(r: Receiver) -> f32 {
             let m = map_wrap(ls, r.layer, vec2<f32>(centre + 2 * vec2<i32>(i, j)) + 0.5);
             if (layer_active(ls, m.layer)) {
                 let dims = textureDimensions(edge_distance);
-                let d = textureLoad(edge_distance, map_texel(dims, in_mask(m, dims)), m.layer, 0).x;
+                let d = textureLoad(edge_distance, map_texel(dims, map_point_in(ls, m, dims)), m.layer, 0).x;
                 if (d > 0.0) {
                     sum += d;
                     count += 1.0;
@@ -166,7 +160,7 @@ fn shade(pixel: ScreenPixel) {
             let lit = q.w <= map_depth(pvmf, shadow_map, q.xyz);
             v = select(0.0, 1.0, lit);
             // A point light (r = 0) has no volumes and no penumbra: the test is all.
-            let in_volume = pvmf.center.w > 0.0 && map_point_depth(pvmf.light_space, mask_depth, in_mask(light_map_point(pvmf.light_space, q.xyz), textureDimensions(mask_depth))) < q.w;
+            let in_volume = pvmf.center.w > 0.0 && image_depth(pvmf, mask_depth, q.xyz) < q.w;
             if (in_volume) {
                 atomicAdd(&counters[0], 1u);
             }

@@ -179,7 +179,7 @@ pub fn mask_size(params: &PvmfParams, projection: &LightProjection, ctx: &crate:
     if !params.mask_auto {
         return map;
     }
-    crate::map_size::auto_map_size(projection, ctx.camera, ctx.prepared, ctx.max_texture_side()).min(map)
+    crate::map_size::receiver_image_size(map, projection, ctx.camera, ctx.prepared, ctx.max_texture_side())
 }
 
 /// The uniform blocks of pass 3.
