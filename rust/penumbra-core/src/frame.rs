@@ -273,6 +273,17 @@ impl<'r> FrameContext<'r> {
         )
     }
 
+    /// The side of a light-space image that is read only at the visible
+    /// receivers' projections (pvm's penumbra volume map, pvmf's mask): the
+    /// automatic map size (`map_size`: a texel per pixel on every visible
+    /// receiver), at most `map`, the shadow map's side, which the image's
+    /// coordinates scale from (`shadow_test.wgsl`'s `map_point_in`). Such an
+    /// image's cost is its volumes' area in texels, and at the map's size it
+    /// resolves no more of the image (issue 30). O(triangles) on the CPU.
+    pub fn receiver_image_size(&self, map: u32, projection: &LightProjection) -> u32 {
+        crate::map_size::auto_map_size(projection, self.camera, self.prepared, self.max_texture_side()).min(map)
+    }
+
     /// The largest texture side the adapter allows.
     pub fn max_texture_side(&self) -> u32 {
         self.device.limits().max_texture_dimension_2d

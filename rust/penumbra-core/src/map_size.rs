@@ -60,16 +60,6 @@ pub fn auto_map_size(projection: &LightProjection, camera: &Camera, scene: &Prep
     n.clamp(MIN_AUTO.min(cap), cap)
 }
 
-/// The side of a light-space image that is read only at the visible
-/// receivers' projections (pvm's penumbra volume map, pvmf's mask): the
-/// automatic map size, a texel per pixel on every visible receiver, at most
-/// `map` (the shadow map's side, which the image's coordinates scale from).
-/// Such an image's cost is its volumes' area in texels, and it resolves no
-/// more of the image at the map's size (issue 30).
-pub fn receiver_image_size(map: u32, projection: &LightProjection, camera: &Camera, scene: &PreparedScene, max_side: u32) -> u32 {
-    auto_map_size(projection, camera, scene, max_side).min(map)
-}
-
 /// `TEXELS_PER_PIXEL * max (w z_l) / pixel` over the visible triangles: the
 /// map resolution that gives every visible receiver a texel no larger than
 /// its pixel; 0 when no triangle is in view.

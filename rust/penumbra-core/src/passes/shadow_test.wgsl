@@ -55,7 +55,7 @@ fn map_point_depth(ls: LightSpace, map: texture_depth_2d_array, m: MapPoint) -> 
 // Map point `m` in a light-space image of `dims` texels that is read only
 // at the receivers' projections (pvm's volume map, pvmf's mask): the map's
 // coordinates scaled. Such an image is the map's size, or smaller where a
-// texel per pixel serves (`map_size::receiver_image_size`).
+// texel per pixel serves (`FrameContext::receiver_image_size`).
 fn map_point_in(ls: LightSpace, m: MapPoint, dims: vec2<u32>) -> MapPoint {
     return MapPoint(m.layer, m.coords * (f32(dims.x) / ls.depth.z));
 }

@@ -66,7 +66,7 @@ pub struct PvmParams {
     pub falloff: bool,
     /// Render the penumbra volume map a texel per pixel on the visible
     /// receivers (`volume_map_size = "auto"`,
-    /// `map_size::receiver_image_size`) rather than at the shadow map's size
+    /// `FrameContext::receiver_image_size`) rather than at the shadow map's size
     /// (`"map"`, the paper's 4.1.3).
     pub volume_map_auto: bool,
     pub open_edges: OpenEdges,
@@ -96,18 +96,6 @@ pub fn volumes_key(params: &PvmParams, projection: &LightProjection, (l, r): (DV
         .projection(projection)
         .u32(params.shadow.map_size)
         .u32(volume_map);
-}
-
-/// The penumbra volume map's side: the shadow map's, or with
-/// `volume_map_size = "auto"` a texel per pixel on the visible receivers,
-/// at most the map's. The map is read only at the receivers' projections,
-/// and its cost is the volumes' area in its texels (issue 30).
-pub fn volume_map_size(params: &PvmParams, projection: &LightProjection, ctx: &FrameContext<'_>) -> u32 {
-    let map = params.shadow.map_size;
-    if !params.volume_map_auto {
-        return map;
-    }
-    crate::map_size::receiver_image_size(map, projection, ctx.camera, ctx.prepared, ctx.max_texture_side())
 }
 
 pub struct PenumbraVolumeMaps {
@@ -200,7 +188,8 @@ impl Method for PenumbraVolumeMaps {
         let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
         let light = frame.ctx.light;
         let (l, r) = (light.center, light.radius);
-        let volume_map = volume_map_size(params, &projection, &frame.ctx);
+        let map_size = params.shadow.map_size;
+        let volume_map = if params.volume_map_auto { frame.ctx.receiver_image_size(map_size, &projection) } else { map_size };
         let mut key = PassKey::new(PENUMBRA_VOLUMES.name);
         key.bytes(&frame.ctx.geometry);
         volumes_key(params, &projection, (l, r), volume_map, &mut key);

@@ -92,9 +92,10 @@ pub struct PvmfParams {
     pub behind: bool,
     /// Filter pixels that fail the shadow-map test outside every volume (5.2).
     pub filter_umbra: bool,
-    /// Render the mask at the size the image needs (`mask_size = "auto"`,
-    /// `crate::map_size`'s pixel criterion, at most the map's) rather than
-    /// at the shadow map's (`"map"`, the paper's).
+    /// Render the mask a texel per pixel on the visible receivers
+    /// (`mask_size = "auto"`, `FrameContext::receiver_image_size`: the mask
+    /// is read only at the receivers' projections, the volume test and d_o's
+    /// taps) rather than at the shadow map's size (`"map"`, the paper's).
     pub mask_auto: bool,
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`: `hidden`, `horizon` and `distance` apply).
@@ -165,21 +166,6 @@ pub fn mask_key(params: &PvmfParams, projection: &LightProjection, (l, r): (DVec
         .projection(projection)
         .u32(params.shadow.map_size)
         .u32(mask_size);
-}
-
-/// The mask's side in texels: the map's, or with `mask_size = "auto"` the
-/// size at which one of its texels projects onto no visible receiver wider
-/// than a pixel (`map_size::auto_map_size`), at most the map's. The mask is
-/// read only at the receivers' own projections (the volume test and d_o's
-/// taps), so a texel per pixel resolves what the image shows of it; its
-/// fill, the volumes' area in texels, is most of the method's cost where
-/// the volumes are large in the light's view (issue 30).
-pub fn mask_size(params: &PvmfParams, projection: &LightProjection, ctx: &crate::frame::FrameContext<'_>) -> u32 {
-    let map = params.shadow.map_size;
-    if !params.mask_auto {
-        return map;
-    }
-    crate::map_size::receiver_image_size(map, projection, ctx.camera, ctx.prepared, ctx.max_texture_side())
 }
 
 /// The uniform blocks of pass 3.
@@ -341,7 +327,8 @@ impl Method for PenumbraVolumeMaskFiltering {
         let (map, projection) = centre_map::centre_map(frame, &params.shadow)?;
         let light = frame.ctx.light;
         let (l, r) = (light.center, light.radius);
-        let mask_size = self::mask_size(params, &projection, &frame.ctx);
+        let map_size = params.shadow.map_size;
+        let mask_size = if params.mask_auto { frame.ctx.receiver_image_size(map_size, &projection) } else { map_size };
         let mut mask_key = PassKey::new(MASK.name);
         mask_key.bytes(&frame.ctx.geometry);
         self::mask_key(params, &projection, (l, r), mask_size, &mut mask_key);
