@@ -92,7 +92,6 @@ pub struct GeometryBuffers {
     pub surface_vertices: PooledBuffer,
     pub surface_indices: PooledBuffer,
     pub positions: PooledBuffer,
-    pub position_indices: PooledBuffer,
 }
 
 /// What every pass of one render reads.
@@ -115,6 +114,9 @@ pub struct FrameContext<'r> {
     pub geometry: [u8; 8],
     /// The scene's drawable geometry, uploaded on first use.
     vertices: OnceCell<Arc<GeometryBuffers>>,
+    /// The triangles that can cast a shadow (`casters::caster_indices`),
+    /// uploaded on first use, and how many were left out.
+    casters: OnceCell<(PooledBuffer, u32, usize)>,
     /// Their positions, for projection fits.
     corner_positions: OnceCell<Vec<Vec3>>,
     /// The light centre's projections fitted so far, by mode.
@@ -157,6 +159,7 @@ impl<'r> FrameContext<'r> {
             gbuffer_key: gbuffer.1,
             geometry,
             vertices: OnceCell::new(),
+            casters: OnceCell::new(),
             corner_positions: OnceCell::new(),
             projections: Default::default(),
             held: Default::default(),
@@ -190,10 +193,34 @@ impl<'r> FrameContext<'r> {
     }
 
     /// The triangles as the light's raster passes draw them: world positions
-    /// (`[f32; 3]`), indices and the index count.
+    /// (`[f32; 3]`), indices and the index count. Only the triangles that can
+    /// hide part of the light from some point of the scene are drawn
+    /// (`casters.rs`): a floor slab under everything is not.
     pub fn light_geometry(&self) -> (&wgpu::Buffer, &wgpu::Buffer, u32) {
         let g = self.geometry_buffers();
-        (&g.positions, &g.position_indices, self.prepared.position_indices.len() as u32)
+        let (indices, count, _) = self.casters();
+        (&g.positions, indices, *count)
+    }
+
+    /// How many triangles the light's raster passes leave out as casting no
+    /// shadow. For a fixed geometry and light centre, a larger radius leaves
+    /// out a subset of a smaller one's, so the count tells the sets apart
+    /// (the shadow map's pass-cache key includes it).
+    pub fn non_casters(&self) -> usize {
+        self.casters().2
+    }
+
+    fn casters(&self) -> &(PooledBuffer, u32, usize) {
+        self.casters.get_or_init(|| {
+            let (indices, culled) = crate::casters::caster_indices(self.scene, self.prepared, self.light.center, self.light.radius);
+            let bytes: &[u8] = bytemuck::cast_slice(&indices);
+            let usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
+            let buffer = self.buffer("frame::caster_indices", (bytes.len() as u64).max(4), usage);
+            if !bytes.is_empty() {
+                self.queue.write_buffer(&buffer, 0, bytes);
+            }
+            (buffer, indices.len() as u32, culled)
+        })
     }
 
     fn geometry_buffers(&self) -> &GeometryBuffers {
@@ -211,7 +238,6 @@ impl<'r> FrameContext<'r> {
                 surface_vertices: upload("frame::surface_vertices", bytemuck::cast_slice(&p.surface_vertices), vertex),
                 surface_indices: upload("frame::surface_indices", bytemuck::cast_slice(&p.surface_indices), index),
                 positions: upload("frame::positions", bytemuck::cast_slice(&p.positions), vertex),
-                position_indices: upload("frame::position_indices", bytemuck::cast_slice(&p.position_indices), index),
             })
         })
     }

@@ -2,6 +2,7 @@
 //! `penumbra-py` binds it.
 
 pub mod error;
+pub mod casters;
 pub mod frame;
 pub mod gpu;
 pub mod image_io;

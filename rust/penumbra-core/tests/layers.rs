@@ -22,6 +22,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("frame.rs", 5),
     ("pass_cache.rs", 6),
     ("map_size.rs", 6),
+    ("casters.rs", 6),
     ("silhouettes.rs", 6),
     ("light_sampling.rs", 6),
     ("light_frustum.rs", 7),

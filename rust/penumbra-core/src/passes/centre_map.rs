@@ -40,17 +40,20 @@ pub fn centre_map(frame: &mut Frame<'_>, settings: &ShadowMapSettings) -> Result
     })?;
     frame.stat("shadow_maps_rendered", rendered);
     frame.stat("map_size", settings.map_size as i64);
+    frame.stat("non_casters", frame.ctx.non_casters() as i64);
     frame.stat("cube_map", i64::from(projection.is_cube()));
     frame.stat("shadow_map_faces", projection.active_faces() as i64);
     frame.intermediate(Intermediate::depth("shadow_map", &map.resource.texture, projection.far()));
     Ok((map, projection))
 }
 
-/// The centre map's pass-cache key: it reads the geometry, the projection,
-/// the map's size and which surface it keeps.
+/// The centre map's pass-cache key: it reads the geometry (the triangles that
+/// cast a shadow, which the light's radius decides too), the projection, the
+/// map's size and which surface it keeps.
 pub fn centre_map_key(ctx: &FrameContext<'_>, settings: &ShadowMapSettings, projection: &LightProjection) -> PassKey {
     PassKey::new(CENTRE_MAP.name)
         .bytes(&ctx.geometry)
+        .u32(ctx.non_casters() as u32)
         .projection(projection)
         .u32(settings.map_size)
         .bytes(format!("{:?}", settings.bias.map_depth()).as_bytes())
