@@ -33,6 +33,16 @@ const MAX_EXACT_PLANES: usize = 64;
 /// receiver that near a surface see past it.
 const ON_PLANE: f64 = 1e-6;
 
+/// The triangles that can cast a shadow, as [`caster_indices`] finds them.
+pub struct Casters {
+    /// `prepared.position_indices` without those that cannot, in mesh order.
+    pub indices: Vec<u32>,
+    /// Per mesh: its triangles' range in `indices`, three per triangle.
+    pub mesh_ranges: Vec<std::ops::Range<u32>>,
+    /// How many triangles were left out.
+    pub culled: usize,
+}
+
 /// `prepared.position_indices` without the triangles that can hide no part of
 /// the light (centre `center`, radius `radius`) from any point of the scene,
 /// and how many were left out. `scene` is what `prepared` was prepared from.
@@ -41,7 +51,7 @@ pub fn caster_indices(
     prepared: &PreparedScene,
     center: DVec3,
     radius: f64,
-) -> (Vec<u32>, usize) {
+) -> Casters {
     let (lo, hi) = (
         prepared.bounds_min.as_dvec3(),
         prepared.bounds_max.as_dvec3(),
@@ -83,7 +93,9 @@ pub fn caster_indices(
     let mut exact_planes = 0;
     let (mut indices, mut culled) = (Vec::with_capacity(prepared.position_indices.len()), 0);
     let mut triangles = prepared.position_indices.chunks_exact(3);
+    let mut mesh_ranges = Vec::with_capacity(prepared.meshes.len());
     for (m, mesh) in prepared.meshes.iter().enumerate() {
+        let start = indices.len() as u32;
         let plane = plane_of(&mesh.vertices, &mesh.faces, slack);
         let mesh_separates = plane
             .filter(|_| exact_planes < MAX_EXACT_PLANES)
@@ -124,8 +136,9 @@ pub fn caster_indices(
                 indices.extend_from_slice(tri);
             }
         }
+        mesh_ranges.push(start..indices.len() as u32);
     }
-    (indices, culled)
+    Casters { indices, mesh_ranges, culled }
 }
 
 /// Meshes of at most this many faces are checked for convexity (each face's
@@ -262,13 +275,17 @@ mod tests {
             ambient: [0.0; 3],
         };
         let p = scene.prepare().unwrap();
-        let (indices, culled) = caster_indices(
+        let Casters { indices, mesh_ranges, culled } = caster_indices(
             &scene,
             &p,
             DVec3::from(center.map(f64::from)),
             radius as f64,
         );
         assert_eq!(indices.len() + 3 * culled, p.position_indices.len());
+        // The ranges tile the list in mesh order.
+        assert_eq!(mesh_ranges.len(), p.meshes.len());
+        assert!(mesh_ranges.windows(2).all(|w| w[0].end == w[1].start));
+        assert_eq!((mesh_ranges[0].start, mesh_ranges.last().unwrap().end), (0, indices.len() as u32));
         culled
     }
 

@@ -22,6 +22,7 @@ use crate::error::{Error, Result};
 use crate::gpu::formats;
 use crate::gpu::{PassTimestamps, Profiler};
 use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
+use crate::casters::Casters;
 use crate::light_frustum::{LightProjection, ProjectionMode};
 use crate::pass_cache::{Entry, PassCache, PassKey};
 use crate::scene::{Camera, PreparedScene, Scene};
@@ -115,8 +116,8 @@ pub struct FrameContext<'r> {
     /// The scene's drawable geometry, uploaded on first use.
     vertices: OnceCell<Arc<GeometryBuffers>>,
     /// The triangles that can cast a shadow (`casters::caster_indices`),
-    /// uploaded on first use, and how many were left out.
-    casters: OnceCell<(PooledBuffer, u32, usize)>,
+    /// their indices uploaded on first use.
+    casters: OnceCell<(PooledBuffer, Casters)>,
     /// Their positions, for projection fits.
     corner_positions: OnceCell<Vec<Vec3>>,
     /// The light centre's projections fitted so far, by mode.
@@ -198,8 +199,14 @@ impl<'r> FrameContext<'r> {
     /// (`casters.rs`): a floor slab under everything is not.
     pub fn light_geometry(&self) -> (&wgpu::Buffer, &wgpu::Buffer, u32) {
         let g = self.geometry_buffers();
-        let (indices, count, _) = self.casters();
-        (&g.positions, indices, *count)
+        let (indices, casters) = self.casters();
+        (&g.positions, indices, casters.indices.len() as u32)
+    }
+
+    /// Per mesh: the range of its triangles in [`Self::light_geometry`]'s
+    /// indices (three per triangle), for passes that draw mesh by mesh.
+    pub fn light_geometry_meshes(&self) -> &[std::ops::Range<u32>] {
+        &self.casters().1.mesh_ranges
     }
 
     /// How many triangles the light's raster passes leave out as casting no
@@ -207,19 +214,19 @@ impl<'r> FrameContext<'r> {
     /// out a subset of a smaller one's, so the count tells the sets apart
     /// (the shadow map's pass-cache key includes it).
     pub fn non_casters(&self) -> usize {
-        self.casters().2
+        self.casters().1.culled
     }
 
-    fn casters(&self) -> &(PooledBuffer, u32, usize) {
+    fn casters(&self) -> &(PooledBuffer, Casters) {
         self.casters.get_or_init(|| {
-            let (indices, culled) = crate::casters::caster_indices(self.scene, self.prepared, self.light.center, self.light.radius);
-            let bytes: &[u8] = bytemuck::cast_slice(&indices);
+            let casters = crate::casters::caster_indices(self.scene, self.prepared, self.light.center, self.light.radius);
+            let bytes: &[u8] = bytemuck::cast_slice(&casters.indices);
             let usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
             let buffer = self.buffer("frame::caster_indices", (bytes.len() as u64).max(4), usage);
             if !bytes.is_empty() {
                 self.queue.write_buffer(&buffer, 0, bytes);
             }
-            (buffer, indices.len() as u32, culled)
+            (buffer, casters)
         })
     }
 

@@ -7,6 +7,11 @@
 //! another object is first (a floor between a light below it and a box
 //! above), that object hides the sliver too.
 //!
+//! The map draws the triangles the shadow map draws (`casters.rs`): a
+//! triangle that hides no part of the light from any point hides no sliver
+//! either, and where it was first the texel now holds what lies beyond it,
+//! nothing of the scene ("none": the sliver is seen).
+//!
 //! Objects come from the silhouette layer's connectivity
 //! ([`SilhouetteCache::mesh_objects`](crate::silhouettes::SilhouetteCache::mesh_objects)):
 //! a mesh that is one connected surface, or a piece of one spread over
@@ -32,23 +37,16 @@ pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 pub use crate::silhouettes::MANY;
 
-/// One corner as the object-map raster reads it.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ObjectVertex {
-    position: [f32; 3],
-    object: u32,
-}
-
-/// The raster pass (one per method that reads the map).
+/// The raster pass (one per method that reads the map): the light
+/// geometry's positions, each mesh drawn as instance object + 1.
 pub fn pass(device: &wgpu::Device, pool: &ResourcePool) -> VolumePass {
-    VolumePass::new::<ObjectVertex>(
+    VolumePass::new::<[f32; 3]>(
         device,
         pool,
         "object_map",
         crate::shader!("light_ids.wgsl"),
-        ("vs_main", "fs_main"),
-        &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
+        ("vs_instance", "fs_main"),
+        &wgpu::vertex_attr_array![0 => Float32x3],
         &[FORMAT],
     )
 }
@@ -99,15 +97,16 @@ pub fn side(map_size: u32) -> u32 {
 
 fn record(frame: &mut Frame<'_>, pass: &VolumePass, projection: &LightProjection, map_size: u32) -> Result<Arc<ObjectMap>> {
     let map_size = side(map_size);
-    let key = PassKey::new(OBJECT_MAP.name).bytes(&frame.ctx.geometry).projection(projection).u32(map_size).finish();
+    let key = PassKey::new(OBJECT_MAP.name).bytes(&frame.ctx.geometry).u32(frame.ctx.non_casters() as u32).projection(projection).u32(map_size).finish();
     frame.cached(OBJECT_MAP.name, key, |frame| {
         frame.pass(OBJECT_MAP.name, |ctx, encoder, ts| -> Result<Arc<ObjectMap>> {
             let objects = ctx.silhouettes.mesh_objects(ctx.prepared);
-            let vertices: Vec<ObjectVertex> =
-                ctx.prepared.corners.iter().map(|c| ObjectVertex { position: c.position, object: objects[c.mesh_index as usize] }).collect();
+            // The instance is object + 1 (the map's id); MANY wraps to 0,
+            // "none", as the shader's id + 1 would.
+            let ids: Vec<Option<u32>> = objects.iter().map(|&o| Some(o.wrapping_add(1))).collect();
             let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
             let map = ctx.light_texture("object_map::map", map_size, projection.layers(), FORMAT, usage);
-            pass.record(ctx, encoder, projection, &vertices, map_size, &[&map], ts)?;
+            pass.record_meshes(ctx, encoder, projection, &ids, map_size, &[&map], ts);
             Ok(Arc::new(ObjectMap { map, objects: table(ctx, &objects) }))
         })?
     })

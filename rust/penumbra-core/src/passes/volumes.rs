@@ -63,13 +63,60 @@ impl VolumePass {
         let count = u32::try_from(vertices.len()).map_err(|_| {
             Error::InvalidScene(format!("too many penumbra volumes for one draw: {} vertices, at most {}", vertices.len(), u32::MAX))
         })?;
-        let depth = ShadowMapPass::create_map(ctx, map_size, projection.layers());
         let buffer = (count > 0).then(|| {
             let bytes: &[u8] = bytemuck::cast_slice(vertices);
             let buffer = ctx.buffer(self.name, bytes.len() as u64, wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST);
             ctx.queue.write_buffer(&buffer, 0, bytes);
             buffer
         });
+        Ok(self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| {
+            if let Some(buffer) = &buffer {
+                pass.set_vertex_buffer(0, buffer.slice(..));
+                pass.draw(0..count, 0..1);
+            }
+        }))
+    }
+
+    /// As [`Self::record`], for a pipeline whose vertices are the light
+    /// geometry's positions ([`FrameContext::light_geometry`]): draws each
+    /// mesh's triangles as instance `ids[mesh]` (the shader's
+    /// `instance_index`), `None` skipping the mesh.
+    pub fn record_meshes(
+        &self,
+        ctx: &FrameContext<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        projection: &LightProjection,
+        ids: &[Option<u32>],
+        map_size: u32,
+        targets: &[&PooledTexture],
+        timestamps: Option<PassTimestamps<'_>>,
+    ) -> PooledTexture {
+        let (positions, indices, _) = ctx.light_geometry();
+        let ranges = ctx.light_geometry_meshes();
+        self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| {
+            pass.set_vertex_buffer(0, positions.slice(..));
+            pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+            for (range, id) in ranges.iter().zip(ids) {
+                // An id of u32::MAX has no instance range: no mesh has it (ids count objects).
+                if let Some((id, end)) = id.filter(|_| !range.is_empty()).and_then(|id| Some((id, id.checked_add(1)?))) {
+                    pass.draw_indexed(range.clone(), 0, id..end);
+                }
+            }
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn record_draws(
+        &self,
+        ctx: &FrameContext<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        projection: &LightProjection,
+        map_size: u32,
+        targets: &[&PooledTexture],
+        timestamps: Option<PassTimestamps<'_>>,
+        draw: impl Fn(&mut wgpu::RenderPass<'_>),
+    ) -> PooledTexture {
+        let depth = ShadowMapPass::create_map(ctx, map_size, projection.layers());
         let faces: Vec<(u32, &LightFrustum)> = projection.active_layers().collect();
         for (k, (layer, frustum)) in faces.iter().enumerate() {
             let layer = *layer as usize;
@@ -94,13 +141,10 @@ impl VolumePass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            if let Some(buffer) = &buffer {
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &bind_group, &[]);
-                pass.set_vertex_buffer(0, buffer.slice(..));
-                pass.draw(0..count, 0..1);
-            }
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            draw(&mut pass);
         }
-        Ok(depth)
+        depth
     }
 }
