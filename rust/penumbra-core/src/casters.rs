@@ -4,29 +4,46 @@
 //! A triangle hides part of the light from a point only if the segment from
 //! the point to some point of the light crosses the triangle's plane. Where
 //! the whole light sphere lies strictly on one side of that plane and every
-//! point of the scene on the same side or on the plane, no such segment
-//! crosses it (it can only touch the plane at a receiver lying in it, which
-//! is the receiver's own surface), so the triangle hides nothing from any
-//! point of the scene: a floor under everything, the walls of a room lit from
-//! inside. The light's raster passes skip those triangles. Their depth never
-//! decides a shadow test: a receiver on them is as near the light as they are.
+//! point that could be shaded lies on the same side or on the plane, no such
+//! segment crosses it (it can only touch the plane at a receiver lying in
+//! it, which is the receiver's own surface), so the triangle hides nothing:
+//! a floor under everything, the walls of a room lit from inside. The
+//! light's raster passes skip those triangles.
 //!
-//! The scene's side is checked against its bounding box's corners (a
-//! superset of the scene), and, for a planar mesh whose plane the box's
-//! corners leave undecided (a floor under a turned scene), against every
-//! vertex of the scene: so a floor is skipped however the scene is turned.
-//! A convex mesh (a floor slab, a box) hides no light from its own surface,
-//! so its faces are checked against the other meshes' box only: the top of a
-//! slab under everything casts nothing either.
+//! The points that could be shaded are every vertex of the scene (a
+//! triangle's points are their combinations, so the least signed distance is
+//! at a vertex), with one exception: a convex object (a connected surface,
+//! [`Topology::components`], however many meshes or pieces it came in) hides
+//! no light from its own surface that the receiver's horizon counts. A point
+//! on a face receives light from the front of the face's plane (every
+//! method's horizon term, with the face's own normal where the mesh has no
+//! shading normals); where the front is the body's outside, the segment
+//! leaves the body and cannot re-enter it; where the front is its inside
+//! (a room's walls) and the light is inside, the segment stays inside. So the
+//! faces of such an object are checked against the other objects' vertices
+//! only: the top of a floor slab under everything casts nothing either.
+//!
+//! The checks are exact over the welded vertices, so the set left out is the
+//! same however the scene is moved or turned and however its surfaces are
+//! split, doubled or given as a soup. Larger objects that are not planar are
+//! kept whole (their triangles cut through their own body); a planar one is
+//! checked once.
+
+use std::collections::HashMap;
 
 use glam::DVec3;
 
 use crate::scene::{PreparedScene, Scene};
+use crate::topology::Topology;
 
-/// The planar meshes whose plane is checked against every vertex of the
-/// scene (each check is one pass over the vertices); beyond these, meshes
-/// are checked per triangle against the bounding box only.
-const MAX_EXACT_PLANES: usize = 64;
+/// Objects of at most this many faces are checked face by face (and for
+/// convexity); larger ones only when planar.
+const MAX_CHECKED_FACES: usize = 256;
+
+/// The most vertex-plane tests one scene's check spends (a plane against
+/// every vertex of the scene is one test per vertex); planes beyond it are
+/// kept. 256 planes against 100k vertices is 2.6e7.
+const MAX_TESTS: usize = 50_000_000;
 
 /// The slack, relative to the scene's extent, within which a point counts as
 /// lying on a plane: far below any shadow map's bias, which already lets a
@@ -45,91 +62,70 @@ pub struct Casters {
 
 /// `prepared.position_indices` without the triangles that can hide no part of
 /// the light (centre `center`, radius `radius`) from any point of the scene,
-/// and how many were left out. `scene` is what `prepared` was prepared from.
-pub fn caster_indices(
-    scene: &Scene,
-    prepared: &PreparedScene,
-    center: DVec3,
-    radius: f64,
-) -> Casters {
-    let (lo, hi) = (
-        prepared.bounds_min.as_dvec3(),
-        prepared.bounds_max.as_dvec3(),
-    );
+/// and how many were left out. `scene` is what `prepared` was prepared from,
+/// `topology` its connectivity across every mesh.
+pub fn caster_indices(scene: &Scene, prepared: &PreparedScene, topology: &Topology, center: DVec3, radius: f64) -> Casters {
+    let (lo, hi) = (prepared.bounds_min.as_dvec3(), prepared.bounds_max.as_dvec3());
     let slack = ON_PLANE * (hi - lo).max_element().max(f64::MIN_POSITIVE);
+    // Each face's world corners, mesh and object, in the order of position_indices.
+    let mut faces = Vec::with_capacity(prepared.triangle_count);
+    let mut base = 0usize;
+    for (m, mesh) in prepared.meshes.iter().enumerate() {
+        for f in &mesh.faces {
+            let object = topology.components[topology.weld[base + f[0] as usize] as usize];
+            faces.push((f.map(|i| mesh.vertices[i as usize]), m, object));
+        }
+        base += mesh.vertices.len();
+    }
+    let mut objects: HashMap<u32, Vec<usize>> = HashMap::new();
+    for (i, face) in faces.iter().enumerate() {
+        objects.entry(face.2).or_default().push(i);
+    }
+    let mut order: Vec<_> = objects.into_iter().collect();
+    order.sort_unstable_by_key(|(object, _)| *object);
+    let mut tests = 0usize;
     // The plane (unit normal n through a) leaves the light strictly on one
-    // side and `lowest(n, a)`, the least signed distance on that side of the
-    // points it could shade, above -slack: none lies beyond it.
-    let separates = |n: DVec3, a: DVec3, lowest: &dyn Fn(DVec3, DVec3) -> f64| {
+    // side and no welded vertex (but those of `skip`, an object) beyond it
+    // on that side.
+    let mut separates = |n: DVec3, a: DVec3, skip: Option<u32>| {
         let s = n.dot(center - a);
-        if s.abs() <= radius + slack {
+        if s.abs() <= radius + slack || tests + topology.positions.len() > MAX_TESTS {
             return false;
         }
-        lowest(n * s.signum(), a) >= -slack
+        tests += topology.positions.len();
+        let n = n * s.signum();
+        topology.positions.iter().zip(&topology.components).all(|(v, c)| Some(*c) == skip || n.dot(*v - a) >= -slack)
     };
-    // Over a box: the corner least along n (+infinity for an empty box).
-    let box_lowest = |(lo, hi): (DVec3, DVec3)| {
-        move |n: DVec3, a: DVec3| {
-            if lo.x > hi.x {
-                f64::INFINITY
-            } else {
-                n.dot((lo + hi) * 0.5 - a) - n.abs().dot((hi - lo) * 0.5)
-            }
-        }
-    };
-    let every_vertex_lowest = |n: DVec3, a: DVec3| {
-        prepared
-            .meshes
-            .iter()
-            .flat_map(|m| m.vertices.iter())
-            .fold(f64::INFINITY, |low, v| low.min(n.dot(*v - a)))
-    };
-    let bounds: Vec<(DVec3, DVec3)> = prepared
-        .meshes
-        .iter()
-        .map(|m| bounds_of(&m.vertices))
-        .collect();
-    let whole = (lo, hi);
-    let mut exact_planes = 0;
-    let (mut indices, mut culled) = (Vec::with_capacity(prepared.position_indices.len()), 0);
-    let mut triangles = prepared.position_indices.chunks_exact(3);
-    let mut mesh_ranges = Vec::with_capacity(prepared.meshes.len());
-    for (m, mesh) in prepared.meshes.iter().enumerate() {
-        let start = indices.len() as u32;
-        let plane = plane_of(&mesh.vertices, &mesh.faces, slack);
-        let mesh_separates = plane
-            .filter(|_| exact_planes < MAX_EXACT_PLANES)
-            .map(|(n, a)| {
-                exact_planes += 1;
-                separates(n, a, &every_vertex_lowest)
-            });
-        // A convex mesh hides no light from its own surface: a point on a
-        // face receives light only from beyond the face's plane (the horizon
-        // term of every method, with the face's own normal where the mesh has
-        // no shading normals), where no part of the body lies. Its faces are
-        // checked against the rest.
-        let flat = scene
-            .meshes
-            .get(m)
-            .is_some_and(|mesh| mesh.normals.is_none());
-        let shaded = if flat && is_convex(&mesh.vertices, &mesh.faces, slack) {
-            bounds
-                .iter()
-                .enumerate()
-                .filter(|(k, _)| *k != m)
-                .fold(empty_box(), |b, (_, o)| union(b, *o))
-        } else {
-            whole
+    let mut skip = vec![false; faces.len()];
+    for (object, members) in &order {
+        let vertices: Vec<DVec3> = topology.positions.iter().zip(&topology.components).filter(|(_, c)| *c == object).map(|(v, _)| *v).collect();
+        let plane = |i: usize| {
+            let [a, b, c] = faces[i].0;
+            (b - a).cross(c - a).try_normalize().map(|n| (n, a))
         };
-        let lowest = box_lowest(shaded);
-        for face in &mesh.faces {
-            let tri = triangles.next().expect("one index triple per face");
-            let skip = mesh_separates.unwrap_or_else(|| {
-                let [a, b, c] = face.map(|i| mesh.vertices[i as usize]);
-                // A zero-area face draws nothing: keep it (its normal is undefined).
-                let n = (b - a).cross(c - a).try_normalize();
-                n.is_some_and(|n| separates(n, a, &lowest))
-            });
+        if members.len() > MAX_CHECKED_FACES {
+            // A planar object: one plane for all its faces.
+            let largest = members.iter().copied().max_by(|&i, &j| area2(&faces[i].0).total_cmp(&area2(&faces[j].0)));
+            if let Some((n, a)) = largest.and_then(plane) {
+                if vertices.iter().all(|v| n.dot(*v - a).abs() <= slack) && separates(n, a, None) {
+                    members.iter().for_each(|&i| skip[i] = true);
+                }
+            }
+            continue;
+        }
+        let flat = members.iter().all(|&i| scene.meshes.get(faces[i].1).is_some_and(|m| m.normals.is_none()));
+        let own = flat && convex_own_light(members.iter().map(|&i| plane(i)), &vertices, center, slack);
+        for &i in members {
+            // A zero-area face draws nothing: keep it (its normal is undefined).
+            skip[i] = plane(i).is_some_and(|(n, a)| separates(n, a, own.then_some(*object)));
+        }
+    }
+    let (mut indices, mut culled) = (Vec::with_capacity(prepared.position_indices.len()), 0);
+    let mut mesh_ranges = Vec::with_capacity(prepared.meshes.len());
+    let mut triangles = prepared.position_indices.chunks_exact(3).zip(&skip);
+    for mesh in &prepared.meshes {
+        let start = indices.len() as u32;
+        for (tri, &skip) in triangles.by_ref().take(mesh.faces.len()) {
             if skip {
                 culled += 1;
             } else {
@@ -141,56 +137,15 @@ pub fn caster_indices(
     Casters { indices, mesh_ranges, culled }
 }
 
-/// Meshes of at most this many faces are checked for convexity (each face's
-/// plane against every vertex); larger ones count as not convex.
-const MAX_CONVEX_FACES: usize = 256;
-
-/// Whether every vertex lies on one side of (or within `slack` of) each
-/// face's plane, whichever way the faces wind: a convex body or a planar piece.
-fn is_convex(vertices: &[DVec3], faces: &[[u32; 3]], slack: f64) -> bool {
-    faces.len() <= MAX_CONVEX_FACES
-        && faces.iter().all(|f| {
-            let [a, b, c] = f.map(|i| vertices[i as usize]);
-            let Some(n) = (b - a).cross(c - a).try_normalize() else {
-                return true;
-            };
-            let (low, high) = vertices.iter().fold((0.0f64, 0.0f64), |(l, h), v| {
-                let s = n.dot(*v - a);
-                (l.min(s), h.max(s))
-            });
-            low >= -slack || high <= slack
-        })
-}
-
-fn bounds_of(vertices: &[DVec3]) -> (DVec3, DVec3) {
-    vertices
-        .iter()
-        .fold(empty_box(), |(lo, hi), v| (lo.min(*v), hi.max(*v)))
-}
-
-fn empty_box() -> (DVec3, DVec3) {
-    (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY))
-}
-
-fn union(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> (DVec3, DVec3) {
-    (a.0.min(b.0), a.1.max(b.1))
-}
-
-/// The plane (unit normal, a point) that every vertex of a mesh lies within
-/// `slack` of, if there is one: the plane of its largest face.
-fn plane_of(vertices: &[DVec3], faces: &[[u32; 3]], slack: f64) -> Option<(DVec3, DVec3)> {
-    let largest = faces
-        .iter()
-        .map(|f| f.map(|i| vertices[i as usize]))
-        .max_by(|p, q| area2(p).total_cmp(&area2(q)))?;
-    let n = (largest[1] - largest[0])
-        .cross(largest[2] - largest[0])
-        .try_normalize()?;
-    let a = largest[0];
-    vertices
-        .iter()
-        .all(|v| n.dot(*v - a).abs() <= slack)
-        .then_some((n, a))
+/// Whether a body with these face planes and vertices is convex and lets no
+/// light reach its own surface through itself: every face wound outward
+/// (its vertices behind every face), or every face inward with the light's
+/// centre in front of every face (inside the body).
+fn convex_own_light(planes: impl Iterator<Item = Option<(DVec3, DVec3)>> + Clone, vertices: &[DVec3], center: DVec3, slack: f64) -> bool {
+    let sides = |(n, a): (DVec3, DVec3)| vertices.iter().fold((0.0f64, 0.0f64), |(l, h), v| (l.min(n.dot(*v - a)), h.max(n.dot(*v - a))));
+    let outward = planes.clone().flatten().all(|p| sides(p).1 <= slack);
+    let inward = planes.flatten().all(|(n, a)| sides((n, a)).0 >= -slack && n.dot(center - a) > 0.0);
+    outward || inward
 }
 
 fn area2(t: &[DVec3; 3]) -> f64 {
@@ -275,9 +230,11 @@ mod tests {
             ambient: [0.0; 3],
         };
         let p = scene.prepare().unwrap();
+        let topology = crate::silhouettes::SilhouetteCache::default().scene_topology(&p);
         let Casters { indices, mesh_ranges, culled } = caster_indices(
             &scene,
             &p,
+            &topology,
             DVec3::from(center.map(f64::from)),
             radius as f64,
         );
@@ -346,9 +303,8 @@ mod tests {
         let (mut f, mut b) = (floor(), block());
         f.vertices = f.vertices.iter().map(|&p| t(p)).collect();
         b.vertices = b.vertices.iter().map(|&p| t(p)).collect();
-        // The box's corners leave both undecided: the floor's plane is checked
-        // against every vertex, the block's faces against the floor's box.
-        assert_eq!(culled(vec![f, b], t([0.0, 3.0, 0.0]), 0.5), 2);
+        // The same faces as unturned: the floor and the block's bottom.
+        assert_eq!(culled(vec![f, b], t([0.0, 3.0, 0.0]), 0.5), 2 + 2);
     }
 
     #[test]
@@ -366,5 +322,31 @@ mod tests {
         b.vertices.push([0.0, 0.5, 0.0]);
         b.faces.push([0, 8, 7]);
         assert_eq!(culled(vec![floor(), b], [0.0, 3.0, 0.0], 0.5), 2 + 2);
+    }
+
+    #[test]
+    fn a_slab_in_pieces_doubled_or_as_a_soup_is_left_out_as_a_whole_one_is() {
+        let slab = cuboid("slab", [-4.0, -0.2, -4.0], [4.0, 0.0, 4.0], false);
+        let light = [0.0, 3.0, 0.0];
+        assert_eq!(culled(vec![slab.clone(), block()], light, 0.5), 12);
+        // Six meshes of two faces each: welded into one object.
+        let pieces: Vec<Mesh> = slab.faces.chunks(2).map(|f| mesh("piece", slab.vertices.clone(), f.to_vec())).collect();
+        assert_eq!(culled([pieces, vec![block()]].concat(), light, 0.5), 12);
+        // A soup: three vertices of its own per face.
+        let soup_vertices = slab.faces.iter().flat_map(|f| f.map(|i| slab.vertices[i as usize])).collect();
+        let soup = mesh("soup", soup_vertices, (0..12).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect());
+        assert_eq!(culled(vec![soup, block()], light, 0.5), 12);
+        // Doubled: both copies.
+        assert_eq!(culled(vec![slab.clone(), slab, block()], light, 0.5), 24);
+    }
+
+    #[test]
+    fn a_closed_room_lit_from_outside_keeps_its_ceiling() {
+        // Inward faces with the light outside, above: no exemption for the
+        // room's own surface, whose vertices count. The ceiling lies between
+        // them and the light, and is kept; the walls and the floor have the
+        // light and the whole room on one side.
+        let room = cuboid("room", [-3.0, 0.0, -3.0], [3.0, 4.0, 3.0], true);
+        assert_eq!(culled(vec![room], [0.0, 6.0, 0.0], 0.5), 10);
     }
 }

@@ -219,7 +219,7 @@ impl<'r> FrameContext<'r> {
 
     fn casters(&self) -> &(PooledBuffer, Casters) {
         self.casters.get_or_init(|| {
-            let casters = crate::casters::caster_indices(self.scene, self.prepared, self.light.center, self.light.radius);
+            let casters = crate::casters::caster_indices(self.scene, self.prepared, &self.silhouettes.scene_topology(self.prepared), self.light.center, self.light.radius);
             let bytes: &[u8] = bytemuck::cast_slice(&casters.indices);
             let usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
             let buffer = self.buffer("frame::caster_indices", (bytes.len() as u64).max(4), usage);

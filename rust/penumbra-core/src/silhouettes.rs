@@ -357,6 +357,11 @@ impl SilhouetteCache {
         Ok(((*edges).clone(), 0, topology.stats))
     }
 
+    /// The scene's connectivity across every mesh, through the cache.
+    pub fn scene_topology(&self, scene: &PreparedScene) -> Arc<Topology> {
+        self.topology(scene_key(scene), scene)
+    }
+
     /// Each mesh's object for the object map (`passes::object_map`): the
     /// connected surface (`Topology::components`) that all its faces' corners
     /// belong to, or `MANY` when they belong to several.
