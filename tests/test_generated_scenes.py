@@ -140,8 +140,11 @@ MEASURED: dict[str, dict[str, float]] = {
     # centre test), search taps spread by scale and blocker_test "behind"
     # (the defaults, docs/methods/pcss.md).
     "pcss": {"median": 0.0728, "worst": 0.1934, "median_stray": 0.0004, "worst_stray": 0.0163},
-    # The paper's blocker test (the default before "behind").
-    "pcss plane": {"median": 0.0781, "worst": 0.1875, "median_stray": 0.0003, "worst_stray": 0.0112},
+    # The paper's blocker test (the default before "behind"). Since the floor
+    # slab and a room's walls are left out of the shadow map (casters.rs:
+    # they hide nothing), it finds no blockers in them: 0.0781 / 0.1875 and
+    # 0.0112 worst stray before, now as the default on seed 38's stray.
+    "pcss plane": {"median": 0.0729, "worst": 0.1934, "median_stray": 0.0004, "worst_stray": 0.0163},
     # The paper's search: uniform taps and the plane test (the default before
     # search="scaled").
     "pcss paper search": {"median": 0.082, "worst": 0.336, "median_stray": 0.0005, "worst_stray": 0.0525},
@@ -160,10 +163,13 @@ MEASURED: dict[str, dict[str, float]] = {
     # The defaults since issue 31 (the disk kernel, no blur, radius offsets,
     # the umbra skipped, s_e 0.02: "pvmf recommended" before), the same with
     # the option blocker_test="behind", and the paper's settings (the
-    # defaults before issue 31).
-    "pvmf": {"median": 0.0724, "worst": 0.268, "median_stray": 0.0004, "worst_stray": 0.0575},
-    "pvmf behind": {"median": 0.0718, "worst": 0.204, "median_stray": 0.0004, "worst_stray": 0.0629},
-    "pvmf paper": {"median": 0.159, "worst": 0.287, "median_stray": 0.0044, "worst_stray": 0.058},
+    # defaults before issue 31). With the floor slab out of the shadow map
+    # (casters.rs) no filter tap fails on the floor's own texels: the
+    # default's median 0.0724 -> 0.0701, worst 0.268 -> 0.203 (seed 1),
+    # and its worst stray 0.0575 -> 0.0614 (seed 37).
+    "pvmf": {"median": 0.0701, "worst": 0.2033, "median_stray": 0.0004, "worst_stray": 0.0614},
+    "pvmf behind": {"median": 0.0716, "worst": 0.2034, "median_stray": 0.0004, "worst_stray": 0.0626},
+    "pvmf paper": {"median": 0.1585, "worst": 0.2804, "median_stray": 0.0044, "worst_stray": 0.0589},
     # The option estimate="area" (each failing tap weighted by the light its
     # occluder hides, in its own cone): misses issue 28's bar on 5 scenes
     # (1, 2, 28, 37, 38) against the default's 7.
