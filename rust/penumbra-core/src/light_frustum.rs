@@ -116,7 +116,21 @@ impl LightProjection {
             let c = a.cross(b);
             let planes = [a - b, a + b, a - c, a + c];
             for t in corners.chunks_exact(3) {
-                let inside = clip_to_cone([t[0], t[1], t[2]].map(|p| p.as_dvec3() - o), &planes);
+                let tri = [t[0], t[1], t[2]].map(|p| p.as_dvec3() - o);
+                // Most triangles lie wholly inside one face's cone and wholly
+                // outside one plane of each other face's: those need no
+                // clipping (clip_to_cone keeps such a triangle as it is, and
+                // leaves nothing of one behind a plane).
+                if planes.iter().any(|n| tri.iter().all(|v| n.dot(*v) < 0.0)) {
+                    continue;
+                }
+                let whole;
+                let inside: &[DVec3] = if tri.iter().all(|v| planes.iter().all(|n| n.dot(*v) >= 0.0)) {
+                    &tri
+                } else {
+                    whole = clip_to_cone(tri, &planes);
+                    &whole
+                };
                 if !inside.is_empty() {
                     active |= 1 << f;
                     // The depth a.v is linear: its minimum over the clipped
