@@ -111,25 +111,19 @@ impl LightProjection {
         for t in corners.chunks_exact(3) {
             nearest_distance = nearest_distance.min(triangle_distance([t[0], t[1], t[2]].map(|p| p.as_dvec3() - o)));
         }
-        for (f, (axis, up)) in (0..6).map(cube_face).enumerate() {
-            let (a, b) = (axis.as_dvec3(), up.as_dvec3());
-            let c = a.cross(b);
-            let planes = [a - b, a + b, a - c, a + c];
+        for f in 0..6 {
+            let planes = cone_planes(f);
+            let a = cube_face(f).0.as_dvec3();
             for t in corners.chunks_exact(3) {
                 let tri = [t[0], t[1], t[2]].map(|p| p.as_dvec3() - o);
-                // Most triangles lie wholly inside one face's cone and wholly
-                // outside one plane of each other face's: those need no
-                // clipping (clip_to_cone keeps such a triangle as it is, and
-                // leaves nothing of one behind a plane).
-                if planes.iter().any(|n| tri.iter().all(|v| n.dot(*v) < 0.0)) {
-                    continue;
-                }
                 let whole;
-                let inside: &[DVec3] = if tri.iter().all(|v| planes.iter().all(|n| n.dot(*v) >= 0.0)) {
-                    &tri
-                } else {
-                    whole = clip_to_cone(tri, &planes);
-                    &whole
+                let inside: &[DVec3] = match in_cone(&tri, &planes) {
+                    Some(true) => &tri,
+                    Some(false) => continue,
+                    None => {
+                        whole = clip_to_cone(tri, &planes);
+                        &whole
+                    }
                 };
                 if !inside.is_empty() {
                     active |= 1 << f;
@@ -369,6 +363,29 @@ fn triangle_distance(t: [DVec3; 3]) -> f64 {
         return a.length().min(b.length()).min(c.length());
     }
     (a + ab * (vb / sum) + ac * (vc / sum)).length()
+}
+
+/// The four planes through the origin whose positive sides bound cube face
+/// `f`'s cone: where a.v >= |b.v| and a.v >= |c.v| (a the face's axis, b its
+/// up vector, c their cross product).
+fn cone_planes(f: usize) -> [DVec3; 4] {
+    let (axis, up) = cube_face(f);
+    let (a, b) = (axis.as_dvec3(), up.as_dvec3());
+    let c = a.cross(b);
+    [a - b, a + b, a - c, a + c]
+}
+
+/// Whether triangle `tri` (relative to the cone's apex) lies wholly inside
+/// the cone of `planes` (`Some(true)`), wholly behind one of them
+/// (`Some(false)`: nothing of it reaches the cone), or across its edge
+/// (`None`: [`clip_to_cone`] says how much). Most triangles are one of the
+/// first two, which need no clipping: clip_to_cone keeps such a triangle as
+/// it is, and leaves nothing of one behind a plane.
+fn in_cone(tri: &[DVec3; 3], planes: &[DVec3; 4]) -> Option<bool> {
+    if planes.iter().any(|n| tri.iter().all(|v| n.dot(*v) < 0.0)) {
+        return Some(false);
+    }
+    tri.iter().all(|v| planes.iter().all(|n| n.dot(*v) >= 0.0)).then_some(true)
 }
 
 pub(crate) fn clip_to_cone(triangle: [DVec3; 3], planes: &[DVec3; 4]) -> Vec<DVec3> {
