@@ -118,6 +118,9 @@ pub struct FrameContext<'r> {
     /// The triangles that can cast a shadow (`casters::caster_indices`),
     /// their indices uploaded on first use.
     casters: OnceCell<(PooledBuffer, Casters)>,
+    /// Per cube face around any point of the light: the caster triangles
+    /// that may reach its cone, one index buffer with a range per face.
+    face_casters: OnceCell<(PooledBuffer, Vec<std::ops::Range<u32>>)>,
     /// Their positions, for projection fits.
     corner_positions: OnceCell<Vec<Vec3>>,
     /// The light centre's projections fitted so far, by mode.
@@ -161,6 +164,7 @@ impl<'r> FrameContext<'r> {
             geometry,
             vertices: OnceCell::new(),
             casters: OnceCell::new(),
+            face_casters: OnceCell::new(),
             corner_positions: OnceCell::new(),
             projections: Default::default(),
             held: Default::default(),
@@ -201,6 +205,62 @@ impl<'r> FrameContext<'r> {
         let g = self.geometry_buffers();
         let (indices, casters) = self.casters();
         (&g.positions, indices, casters.indices.len() as u32)
+    }
+
+    /// The triangles a raster pass draws into layer `layer` of `projection`:
+    /// [`Self::light_geometry`]'s, less, on a cube around a point of the
+    /// light (its centre, a light sample), those that reach nothing of the
+    /// face's cone from any point of the light and would be clipped away
+    /// whole (`light_frustum::faces_reached`): each triangle is drawn into
+    /// one or two faces instead of every face. Positions, indices, and the
+    /// range of indices to draw.
+    pub fn light_geometry_for(&self, projection: &LightProjection, layer: u32) -> (&wgpu::Buffer, &wgpu::Buffer, std::ops::Range<u32>) {
+        let g = self.geometry_buffers();
+        let reach = self.face_reach();
+        if projection.is_cube() && projection.origin.as_dvec3().distance(self.light.center) <= reach {
+            let (indices, ranges) = self.face_casters();
+            return (&g.positions, indices, ranges[layer as usize].clone());
+        }
+        let (indices, casters) = self.casters();
+        (&g.positions, indices, 0..casters.indices.len() as u32)
+    }
+
+    /// How far from the light's centre the apexes of [`Self::face_casters`]
+    /// may lie: the radius and a margin (1e-4 of it, and 1e-6 of the scene's
+    /// extent) far above float32 rounding of the clip coordinates, so that
+    /// a triangle left out of a face is clipped away there by a margin too.
+    fn face_reach(&self) -> f64 {
+        let extent = (self.prepared.bounds_max - self.prepared.bounds_min).max_element() as f64;
+        self.light.radius * (1.0 + 1e-4) + 1e-6 * extent
+    }
+
+    fn face_casters(&self) -> &(PooledBuffer, Vec<std::ops::Range<u32>>) {
+        self.face_casters.get_or_init(|| {
+            let casters = &self.casters().1.indices;
+            let positions = &self.prepared.positions;
+            let reach = self.face_reach();
+            let masks: Vec<u32> = casters
+                .chunks_exact(3)
+                .map(|t| crate::light_frustum::faces_reached(self.light.center, reach, [t[0], t[1], t[2]].map(|i| Vec3::from(positions[i as usize]).as_dvec3())))
+                .collect();
+            let (mut indices, mut ranges) = (Vec::new(), Vec::with_capacity(6));
+            for f in 0..6 {
+                let start = indices.len() as u32;
+                for (t, mask) in casters.chunks_exact(3).zip(&masks) {
+                    if mask & (1 << f) != 0 {
+                        indices.extend_from_slice(t);
+                    }
+                }
+                ranges.push(start..indices.len() as u32);
+            }
+            let bytes: &[u8] = bytemuck::cast_slice(&indices);
+            let usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
+            let buffer = self.buffer("frame::face_caster_indices", (bytes.len() as u64).max(4), usage);
+            if !bytes.is_empty() {
+                self.queue.write_buffer(&buffer, 0, bytes);
+            }
+            (buffer, ranges)
+        })
     }
 
     /// Per mesh: the range of its triangles in [`Self::light_geometry`]'s

@@ -388,6 +388,20 @@ fn in_cone(tri: &[DVec3; 3], planes: &[DVec3; 4]) -> Option<bool> {
     tri.iter().all(|v| planes.iter().all(|n| n.dot(*v) >= 0.0)).then_some(true)
 }
 
+/// The cube faces (bit f: face f) whose cone, from any apex within `reach`
+/// of `origin`, triangle `tri` may reach: all but those one of whose planes,
+/// moved back by `reach`, has the whole triangle strictly behind it. From an
+/// apex o' with |o' - o| <= reach, n.(p - o') <= n.(p - o) + reach |n|, so a
+/// triangle behind a moved plane is behind the plane itself seen from o',
+/// and the face's frustum clips all of it away. A superset: raster passes
+/// from such apexes (the light's centre and its samples) may draw only these.
+pub fn faces_reached(origin: DVec3, reach: f64, tri: [DVec3; 3]) -> u32 {
+    let rel = tri.map(|p| p - origin);
+    (0..6)
+        .filter(|&f| !cone_planes(f).iter().any(|n| rel.iter().all(|v| n.dot(*v) < -reach * n.length())))
+        .fold(0, |mask, f| mask | 1 << f)
+}
+
 pub(crate) fn clip_to_cone(triangle: [DVec3; 3], planes: &[DVec3; 4]) -> Vec<DVec3> {
     let mut polygon = [DVec3::ZERO; 8];
     polygon[..3].copy_from_slice(&triangle);
@@ -595,5 +609,40 @@ mod tests {
         assert!((at(DVec3::new(2.0, -1.0, 0.0)) - 1.0).abs() < 1e-12);
         assert!((at(DVec3::new(1.5, 0.5, 0.7)) - 0.7).abs() < 1e-12);
         assert!((at(DVec3::new(3.0, 2.0, 0.0)) - 2f64.sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_triangle_left_out_of_a_face_reaches_nothing_of_it_from_any_apex_within_reach() {
+        // A fixed pseudo-random walk over triangles and apexes (xorshift).
+        let mut state = 0x9e3779b97f4a7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let reach = 0.3;
+        let (mut left_out, mut kept) = (0, 0);
+        for _ in 0..3000 {
+            let centre = DVec3::new(next(), next(), next()) * 3.0;
+            let tri = [0; 3].map(|_| centre + DVec3::new(next(), next(), next()) * 0.5);
+            let mask = faces_reached(DVec3::ZERO, reach, tri);
+            for f in 0..6 {
+                if mask & (1 << f) != 0 {
+                    kept += 1;
+                    continue;
+                }
+                left_out += 1;
+                for _ in 0..8 {
+                    let apex = DVec3::new(next(), next(), next()).normalize_or_zero() * reach * next().abs();
+                    assert!(clip_to_cone(tri.map(|p| p - apex), &cone_planes(f)).is_empty(), "{tri:?} reaches face {f} from {apex:?}");
+                }
+            }
+        }
+        // Most triangles are left out of most faces.
+        assert!(left_out > 2 * kept, "{left_out} left out, {kept} kept");
+        // A small triangle straight below the origin: the -y face only.
+        let below = [DVec3::new(-0.1, -2.0, -0.1), DVec3::new(0.1, -2.0, -0.1), DVec3::new(0.0, -2.0, 0.1)];
+        assert_eq!(faces_reached(DVec3::ZERO, 0.0, below), 1 << 3);
     }
 }

@@ -117,7 +117,7 @@ impl ShadowMapPass {
         let faces: Vec<(u32, &LightFrustum)> = projection.active_layers().collect();
         for (k, (layer, frustum)) in faces.iter().enumerate() {
             let (first, last) = (first && k == 0, last && k + 1 == faces.len());
-            self.record_face(ctx, encoder, map, *layer, frustum, depth, timestamps, (first, last));
+            self.record_face(ctx, encoder, map, projection, *layer, frustum, depth, timestamps, (first, last));
         }
     }
 
@@ -127,6 +127,7 @@ impl ShadowMapPass {
         ctx: &FrameContext<'_>,
         encoder: &mut wgpu::CommandEncoder,
         map: &PooledTexture,
+        projection: &LightProjection,
         layer: u32,
         frustum: &LightFrustum,
         depth: MapDepth,
@@ -135,14 +136,14 @@ impl ShadowMapPass {
     ) {
         let uniforms = uniform_buffer(ctx, "shadow_map::uniforms", &shadow_uniforms(frustum));
         let bind_group = ctx.pool.bind_group(ctx.device, "shadow_map::bind_group", &self.layout, &[Binding::Buffer(&uniforms)]);
-        let (positions, indices, count) = ctx.light_geometry();
+        let (positions, indices, range) = ctx.light_geometry_for(projection, layer);
         let draw = |encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, pipeline, writes| {
             let mut pass = begin_depth_pass(encoder, target, writes);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             pass.set_vertex_buffer(0, positions.slice(..));
             pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..count, 0, 0..1);
+            pass.draw_indexed(range.clone(), 0, 0..1);
         };
         let part = |first: bool, last: bool| timestamps.and_then(|t| t.render_part(first, last));
         let target = &map.layer_views[layer as usize];
