@@ -253,13 +253,7 @@ impl<'r> FrameContext<'r> {
                 }
                 ranges.push(start..indices.len() as u32);
             }
-            let bytes: &[u8] = bytemuck::cast_slice(&indices);
-            let usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
-            let buffer = self.buffer("frame::face_caster_indices", (bytes.len() as u64).max(4), usage);
-            if !bytes.is_empty() {
-                self.queue.write_buffer(&buffer, 0, bytes);
-            }
-            (buffer, ranges)
+            (self.upload("frame::face_caster_indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX), ranges)
         })
     }
 
@@ -280,25 +274,22 @@ impl<'r> FrameContext<'r> {
     fn casters(&self) -> &(PooledBuffer, Casters) {
         self.casters.get_or_init(|| {
             let casters = crate::casters::caster_indices(self.scene, self.prepared, &self.silhouettes.scene_topology(self.prepared), self.light.center, self.light.radius);
-            let bytes: &[u8] = bytemuck::cast_slice(&casters.indices);
-            let usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
-            let buffer = self.buffer("frame::caster_indices", (bytes.len() as u64).max(4), usage);
-            if !bytes.is_empty() {
-                self.queue.write_buffer(&buffer, 0, bytes);
-            }
-            (buffer, casters)
+            (self.upload("frame::caster_indices", bytemuck::cast_slice(&casters.indices), wgpu::BufferUsages::INDEX), casters)
         })
+    }
+
+    /// A pooled buffer of `usage` (and COPY_DST) holding `bytes` (at least 4 bytes long).
+    fn upload(&self, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> PooledBuffer {
+        let buffer = self.buffer(label, (bytes.len() as u64).max(4), usage | wgpu::BufferUsages::COPY_DST);
+        if !bytes.is_empty() {
+            self.queue.write_buffer(&buffer, 0, bytes);
+        }
+        buffer
     }
 
     fn geometry_buffers(&self) -> &GeometryBuffers {
         self.vertices.get_or_init(|| {
-            let upload = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
-                let buffer = self.buffer(label, (bytes.len() as u64).max(4), usage | wgpu::BufferUsages::COPY_DST);
-                if !bytes.is_empty() {
-                    self.queue.write_buffer(&buffer, 0, bytes);
-                }
-                buffer
-            };
+            let upload = |label: &str, bytes: &[u8], usage| self.upload(label, bytes, usage);
             let p = self.prepared;
             let (vertex, index) = (wgpu::BufferUsages::VERTEX, wgpu::BufferUsages::INDEX);
             Arc::new(GeometryBuffers {
