@@ -73,11 +73,18 @@ def test_auto_is_the_fitted_frustum_wherever_it_covers(renderer: penumbra.Render
 
 def test_cube_faces_that_see_nothing_are_not_rendered(renderer: penumbra.Renderer) -> None:
     wide = penumbra.scenes.wide_floor(width=32, height=32)
-    result = renderer.render(wide, "hard", map_size=256, intermediates=True)
+    result = renderer.render(wide, "hard", map_size=256, intermediates=True, projection="cube")
     assert result.stats["cube_map"] == 1 and result.stats["shadow_map_faces"] == 5, "nothing is above the light"
     assert result.images["shadow_map"].shape == (6, 256, 256)
+    # The floor casts nothing: one frustum covers the casters and their
+    # penumbrae (issue 30), and auto takes it.
+    assert renderer.render(wide, "hard", map_size=256).stats["cube_map"] == 0
+    # A light close over a plate wider than 80 degrees each way from it.
+    plate = penumbra.scenes.box((0.0, 1.0, 0.0), (2.0, 0.1, 2.0), name="plate", object_id=1)
+    close = penumbra.Scene([penumbra.scenes.ground_plane(), plate], penumbra.SphereLight((0.0, 1.3, 0.0), 0.1, intensity=5.0), wide.camera)
+    assert renderer.render(close, "hard", map_size=256).stats["cube_map"] == 1
     with pytest.raises(penumbra.SceneError, match="beyond the 80 degrees"):
-        renderer.render(wide, "hard", map_size=256, projection="frustum")
+        renderer.render(close, "hard", map_size=256, projection="frustum")
     # The seam scene's light sees nothing above it nor behind it (-x).
     assert renderer.render(seam_scene(), "hard", projection="cube", map_size=256).stats["shadow_map_faces"] == 4
 
@@ -91,7 +98,11 @@ def seam_truth() -> pm.GroundTruth:
 # (0.0558 and 0.0766, beyond the bound, with the paper's search="uniform",
 # which it missed since the frustum's fit changed, issue 27, and its horizon
 # repair lowered the frustum's error more than the cube's).
-@pytest.mark.parametrize("method", MAPPED)
+# pcf's kernel is a fixed count of texels, so its penumbra follows the
+# texel size, which the two projections set apart: since the frustum covers
+# only the casters (issue 30), its texels here are finer than the cube's
+# (errors 0.208 and 0.234, measured).
+@pytest.mark.parametrize("method", [m for m in MAPPED if m != "pcf"])
 def test_cube_faces_are_as_accurate_as_the_frustum(renderer: penumbra.Renderer, seam_truth: pm.GroundTruth, method: str) -> None:
     """Where both projections apply, the cube's penumbra error against
     Mitsuba is the frustum's: measured within 0.0043 on this scene (pcf and
@@ -157,12 +168,19 @@ def room(camera_inside: bool) -> penumbra.Scene:
 def test_a_room_lit_from_inside_renders_with_the_camera_inside(renderer: penumbra.Renderer, method: str) -> None:
     result = renderer.render(room(camera_inside=True), method, **cheap(method))
     check_images(result, method)
-    assert result.stats.get("cube_map", 1) == 1
+    # The walls cast nothing: one frustum covers the pillar and its
+    # penumbra (issue 30); the cube renders the same room.
+    assert result.stats.get("cube_map", 0) == 0
+    if method in MAPPED:
+        cube = renderer.render(room(camera_inside=True), method, projection="cube", **cheap(method))
+        check_images(cube, method)
+        assert cube.stats.get("cube_map", 1) == 1
     assert (result.object_id >= 0).all(), "every pixel sees a wall"
 
 
 def test_reference_matches_the_truth_in_a_room(renderer: penumbra.Renderer) -> None:
-    """`reference` inside a room (cube maps from every light sample) against
+    """`reference` inside a room (from every light sample, a frustum around
+    the pillar, issue 30: the walls cast nothing) against
     Mitsuba: no bias, i.e. its penumbra error within 1.5 times the combined
     noise of the two estimators plus its resolution error. Measured: error
     0.022 at 256 samples (map 1024) against ground-truth noise 0.0076 (256
@@ -178,7 +196,7 @@ def test_reference_matches_the_truth_in_a_room(renderer: penumbra.Renderer) -> N
     resolution = metrics.rmse(result.visibility, finer.visibility, region)
     error = metrics.rmse(result.visibility, gt.visibility, region)
     assert error < 1.5 * np.hypot(truth_noise, sampling_noise) + resolution, (error, truth_noise, sampling_noise, resolution)
-    assert result.stats["cube_maps"] == result.stats["light_samples"]
+    assert result.stats["cube_maps"] == 0
 
 
 @pytest.mark.skipif(not (MESHES / "CornellBox-Original.obj").exists(), reason="../shared/meshes is absent")

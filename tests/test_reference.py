@@ -84,12 +84,16 @@ def test_finite_and_bounded_for_every_radius(renderer: penumbra.Renderer, radius
 
 
 def test_sphere_samples_beyond_one_shadow_map_frustum_take_cube_faces(renderer: penumbra.Renderer) -> None:
-    """Samples on the sphere's side see the scene beyond one frustum's 80
-    degrees: with the default projection they take cube faces (the centre's
-    frustum still covers it); with projection="frustum" it is a clear error."""
-    # At radius 1.4, 2 of the 11 samples (at 1.2 none: the frustum aims at
-    # the centre of the geometry's bounding box, so it covers more of them).
-    scene = penumbra.scenes.get("overlapping_casters", width=32, height=32, light_radius=1.4)
+    """A light sample's map covers the casters (issue 30: not the floor), in
+    one frustum where its texels are no coarser than a cube face's. Samples
+    low on a large light over a plate see it wider: with the default
+    projection they take cube faces (the samples above do not); the lowest,
+    0.05 over the plate, sees it beyond one frustum's 80 degrees, and with
+    projection="frustum" that is a clear error."""
+    plate = penumbra.scenes.box((0.0, 1.0, 0.0), (2.0, 0.1, 2.0), name="plate", object_id=1)
+    camera = penumbra.Camera(eye=(0.0, 4.0, 6.0), target=(0.0, 0.5, 0.0), fov_y=50.0, width=32, height=32)
+    light = penumbra.SphereLight((0.0, 2.5, 0.0), 1.4, intensity=20.0)
+    scene = penumbra.Scene([penumbra.scenes.ground_plane(), plate], light, camera)
     result = renderer.render(scene, "reference", n_samples=9, map_size=256)
     assert 0 < result.stats["cube_maps"] < result.stats["light_samples"], result.stats
     assert result.stats["shadow_map_faces"] < 6 * result.stats["cube_maps"] + result.stats["light_samples"], "faces that see nothing are skipped"

@@ -123,6 +123,7 @@ pub struct FrameContext<'r> {
     face_casters: OnceCell<(PooledBuffer, Vec<std::ops::Range<u32>>)>,
     /// Their positions, for projection fits.
     corner_positions: OnceCell<Vec<Vec3>>,
+    caster_points: OnceCell<Vec<Vec3>>,
     /// The light centre's projections fitted so far, by mode.
     projections: std::cell::RefCell<Vec<(ProjectionMode, Arc<LightProjection>)>>,
     /// Pooled resources this frame took: in use until the frame ends.
@@ -166,6 +167,7 @@ impl<'r> FrameContext<'r> {
             casters: OnceCell::new(),
             face_casters: OnceCell::new(),
             corner_positions: OnceCell::new(),
+            caster_points: OnceCell::new(),
             projections: Default::default(),
             held: Default::default(),
         }
@@ -176,14 +178,37 @@ impl<'r> FrameContext<'r> {
         self.corner_positions.get_or_init(|| self.prepared.corners.iter().map(|c| Vec3::from(c.position)).collect())
     }
 
+    /// The positions of the casting triangles' corners (each vertex once):
+    /// what a light map's frustum is fitted around ([`LightProjection::fit`]).
+    pub fn caster_points(&self) -> &[Vec3] {
+        self.caster_points.get_or_init(|| {
+            let positions = &self.prepared.positions;
+            let mut seen = vec![false; positions.len()];
+            let mut points = Vec::new();
+            for &i in &self.casters().1.indices {
+                if !std::mem::replace(&mut seen[i as usize], true) {
+                    points.push(Vec3::from(positions[i as usize]));
+                }
+            }
+            points
+        })
+    }
+
+    /// The projection of a light map from `origin` (the centre, or a light
+    /// sample with `radius` 0) that `mode` asks for: a frustum fitted around
+    /// the casters and the penumbrae they may cast, or cube faces.
+    pub fn fit_projection(&self, origin: Vec3, radius: f32, mode: ProjectionMode) -> Result<LightProjection> {
+        let corners = self.corner_positions();
+        LightProjection::fit(origin, radius, self.caster_points(), corners, (Vec3::from(self.prepared.bounds_min), Vec3::from(self.prepared.bounds_max)), mode)
+    }
+
     /// The shadow-map projection from the light centre that `mode` asks for
     /// (fitted once per frame and mode): the fitted frustum, or cube faces.
     pub fn projection(&self, mode: ProjectionMode) -> Result<Arc<LightProjection>> {
         if let Some((_, p)) = self.projections.borrow().iter().find(|(m, _)| *m == mode) {
             return Ok(p.clone());
         }
-        let corners = self.corner_positions();
-        let fitted = Arc::new(LightProjection::fit(Vec3::from(self.light.center_f32), corners, corners, mode)?);
+        let fitted = Arc::new(self.fit_projection(Vec3::from(self.light.center_f32), self.light.radius_f32, mode)?);
         self.projections.borrow_mut().push((mode, fitted.clone()));
         Ok(fitted)
     }

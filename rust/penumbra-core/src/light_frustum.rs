@@ -1,13 +1,16 @@
 //! The light's shadow-map projection (SPEC section 3): a perspective
-//! frustum from the light point fitted to the scene's geometry where one
-//! frustum covers it, six cube faces where it does not.
+//! frustum from the light point fitted to what can shadow something (the
+//! casters and the penumbrae they may cast) where one frustum covers it,
+//! six cube faces where it does not.
 //!
 //! The frustum is off-centre: its window on the plane at unit depth is the
-//! bounding rectangle of every vertex's projection, so no texel is spent on
-//! empty space beside the geometry. It covers at most
-//! [`MAX_HALF_ANGLE_DEGREES`] off its axis; beyond that (a floor much wider
-//! than the light is high, a room lit from inside) the cube's six 90-degree
-//! faces take over, of which only those that see geometry are rendered.
+//! smallest square holding the bounding rectangle of every caster vertex's
+//! ball of the light's radius (`LightProjection::fit`), so no texel is
+//! spent on a floor that only receives, and a point projecting outside it
+//! is lit. It covers at most [`MAX_HALF_ANGLE_DEGREES`] off its axis;
+//! beyond that (a light close over a wide caster, or inside a ring of
+//! casters) the cube's six 90-degree faces take over, of which only those
+//! that see geometry are rendered.
 //! Shadow maps store *linear* light-view depth (distance along the face's
 //! axis), so biases can be stated in world units.
 
@@ -18,7 +21,7 @@ use crate::error::{Error, Result};
 /// Which projection shadow maps use (the `projection` parameter).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum ProjectionMode {
-    /// The fitted frustum where it covers the geometry, cube faces otherwise.
+    /// The fitted frustum where it covers the casters and their penumbrae, cube faces otherwise.
     Auto,
     /// The fitted frustum, or an error naming the angle when it cannot cover the geometry.
     Frustum,
@@ -77,14 +80,36 @@ pub struct LightProjection {
 
 impl LightProjection {
     /// The projection from `origin` for the triangles whose corners are
-    /// `corners` (three per triangle), as `mode` asks; a frustum is fitted
-    /// around `points` (the corners, or the vertices they index).
-    pub fn fit(origin: Vec3, points: &[Vec3], corners: &[Vec3], mode: ProjectionMode) -> Result<Self> {
+    /// `corners` (three per triangle), as `mode` asks.
+    ///
+    /// A frustum is fitted around what can shadow something, not around all
+    /// geometry: the balls of radius `radius` (the light's) around the
+    /// `casters` (the corners of the triangles that may hide part of the
+    /// light, `casters.rs`). A point P hidden from some point L of the light
+    /// by a caster point C lies on the ray from L through C, whose direction
+    /// from `origin` is within asin(radius / |C - origin|) of C's: inside
+    /// the cone of the ball around C. The ball around a triangle's every
+    /// point lies in the convex hull of the balls around its corners, and
+    /// the window of a convex set is that of the sets it is the hull of, so
+    /// every point that may lie in shadow or penumbra projects into the
+    /// window; a point outside it (or behind the light) is lit, and reads
+    /// there clamp to a border the passes keep empty (`ShadowMapPass`).
+    /// The depth range still spans the box `bounds` around all geometry.
+    /// With no casters the frustum is fitted around the `corners`.
+    pub fn fit(origin: Vec3, radius: f32, casters: &[Vec3], corners: &[Vec3], bounds: (Vec3, Vec3), mode: ProjectionMode) -> Result<Self> {
         if mode != ProjectionMode::Cube {
-            match LightFrustum::fit(origin, points.iter().copied()) {
-                Ok(frustum) => return Ok(Self { faces: vec![frustum], active: 1, origin, nearest: 0.0 }),
+            let balls = if casters.is_empty() { (corners, 0.0) } else { (casters, radius) };
+            let fitted = LightFrustum::fit_balls(origin, balls.0, balls.1, bounds);
+            match fitted {
+                // `auto` takes the frustum only where no texel of it is
+                // coarser than the cube's coarsest: a texel spans at most
+                // the window's width / map size on the unit-depth plane
+                // (at the axis; less off it), a cube face's 2 / map size.
+                Ok(frustum) if mode == ProjectionMode::Frustum || frustum.width() <= AUTO_MAX_WIDTH => {
+                    return Ok(Self { faces: vec![frustum], active: 1, origin, nearest: 0.0 })
+                }
                 Err(e) if mode == ProjectionMode::Frustum => return Err(e),
-                Err(_) => {}
+                _ => {}
             }
         }
         Self::cube(origin, corners)
@@ -189,6 +214,14 @@ impl LightProjection {
     }
 }
 
+/// The widest window (on the unit-depth plane) that `auto` takes a frustum
+/// for: a cube face's, 2, so that the frustum's texels are nowhere coarser
+/// than the cube's (a window as wide as the 80 degrees the frustum may
+/// cover spreads a texel over 5.7 times the angle of a cube face's centre
+/// texel; `backprojection`'s error on a slab's edge 2 below the light, 53
+/// degrees off the frustum's axis, was 2.6 times the cube's).
+pub const AUTO_MAX_WIDTH: f32 = 2.0;
+
 /// Widest half-angle (per axis) one frustum may cover. Beyond it texels
 /// stretch without bound; geometry there needs an omnidirectional map.
 pub const MAX_HALF_ANGLE_DEGREES: f32 = 80.0;
@@ -208,11 +241,23 @@ pub struct LightFrustum {
 impl LightFrustum {
     /// Fits a frustum from `center` around all `points`.
     pub fn fit(center: Vec3, points: impl Iterator<Item = Vec3> + Clone) -> Result<Self> {
+        let points: Vec<Vec3> = points.collect();
+        Self::fit_balls(center, &points, 0.0, bounds(&points))
+    }
+
+    /// Fits a frustum from `center` around the balls of radius `radius`
+    /// around `balls` (see [`LightProjection::fit`]), with a depth range
+    /// that also spans every point of the box `bounds` (min, max corners).
+    pub fn fit_balls(center: Vec3, balls: &[Vec3], radius: f32, bounds: (Vec3, Vec3)) -> Result<Self> {
+        // Linear depth is stored: the far plane spans every point in front
+        // that may read the map (no depth along any axis exceeds the distance
+        // to the box's farthest corner), the near plane only what is drawn.
+        let (c, lo, hi) = (center.as_dvec3(), bounds.0.as_dvec3(), bounds.1.as_dvec3());
+        let reach = (lo - c).abs().max((hi - c).abs()).length();
         // Aim at the mean direction to the geometry, then re-aim once at the
         // centre of the projected window so the window is roughly symmetric.
         let mut sum = Vec3::ZERO;
-        let mut count = 0usize;
-        for p in points.clone() {
+        for &p in balls {
             // Normalisation is safe: the scene check keeps every surface off the
             // light. Where the squared length would underflow or overflow
             // float32 (a scene 1e-25 across, or 1e19), dividing by the largest
@@ -225,8 +270,8 @@ impl LightFrustum {
                 let m = d.abs().max_element();
                 if m > 0.0 { (d / m).normalize_or_zero() } else { Vec3::ZERO }
             };
-            count += 1;
         }
+        let count = balls.len();
         if count == 0 {
             return Err(Error::InvalidScene("has no geometry to fit a shadow map to".into()));
         }
@@ -246,52 +291,77 @@ impl LightFrustum {
         // reordered surface gets the very same frustum and texel grid
         // (issue 27). The mean direction weights each corner once per face:
         // it is only the fallback (the box's centre may lie behind the light).
-        let (lo, hi) = points.clone().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let (lo, hi) = balls.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
         let to_box = (0.5 * lo + 0.5 * hi - center).normalize_or_zero();
-        let mut fitted = match (to_box != Vec3::ZERO).then(|| Self::fit_along(center, to_box, points.clone())) {
+        let fit_along = |axis: Vec3| Self::fit_along(center, axis, balls, radius, reach);
+        let mut fitted = match (to_box != Vec3::ZERO).then(|| fit_along(to_box)) {
             Some(Ok(f)) => f,
-            _ => Self::fit_along(center, axis, points.clone())?,
+            _ => fit_along(axis)?,
         };
         let w = fitted.window;
         let mid = Vec3::new(0.5 * (w.x + w.y), 0.5 * (w.z + w.w), -1.0);
         let recentred = fitted.view.inverse().transform_vector3(mid).normalize_or_zero();
         if recentred != Vec3::ZERO {
             axis = recentred;
-            if let Ok(better) = Self::fit_along(center, axis, points) {
+            if let Ok(better) = fit_along(axis) {
                 fitted = better;
             }
         }
         Ok(fitted)
     }
 
-    fn fit_along(center: Vec3, axis: Vec3, points: impl Iterator<Item = Vec3>) -> Result<Self> {
+    fn fit_along(center: Vec3, axis: Vec3, balls: &[Vec3], radius: f32, reach: f64) -> Result<Self> {
         // Any up vector not parallel to the axis gives a valid basis.
         let up = if axis.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
         let view = glam::camera::rh::view::look_to_mat4(center, axis, up);
-        let max_tan = MAX_HALF_ANGLE_DEGREES.to_radians().tan();
-        let (mut x0, mut x1, mut y0, mut y1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
-        let (mut z_min, mut z_max) = (f32::MAX, 0.0f32);
-        for p in points {
-            let q = view.transform_point3(p);
+        let max_tan = f64::from(MAX_HALF_ANGLE_DEGREES.to_radians().tan());
+        let r = f64::from(radius.max(0.0));
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        let (mut z_min, mut z_max) = (f64::MAX, 0.0f64);
+        let view64 = view.as_dmat4();
+        for p in balls {
+            let q = view64.transform_point3(p.as_dvec3());
             let z = -q.z;
-            let (u, v) = (q.x / z.max(f32::MIN_POSITIVE), q.y / z.max(f32::MIN_POSITIVE));
-            // z <= 0 is behind the light; |u| or |v| > max_tan is too wide for one map.
-            if z <= 0.0 || u.abs() > max_tan || v.abs() > max_tan {
-                let angle = q.truncate().length().atan2(z).to_degrees();
-                return Err(surrounds_error(angle));
+            // The ball's extent along x on the unit-depth plane: the planes
+            // x = u z through the light touching it, at distance r from its
+            // centre: (x - u z)^2 = r^2 (1 + u^2), a quadratic in u whose
+            // leading coefficient z^2 - r^2 is positive for a ball wholly in
+            // front (checked), so the square root's argument
+            // x^2 + z^2 - r^2 > 0 too. r = 0 gives u = x / z.
+            let lead = z * z - r * r;
+            if z <= 0.0 || !(lead > 1e-6 * z * z) {
+                let angle = q.truncate().length().atan2(z).to_degrees() + (r / q.length().max(r)).asin().to_degrees();
+                return Err(surrounds_error(angle as f32));
             }
-            x0 = x0.min(u);
-            x1 = x1.max(u);
-            y0 = y0.min(v);
-            y1 = y1.max(v);
+            let extent = |x: f64| {
+                let s = r * (x * x + lead).sqrt();
+                ((x * z - s) / lead, (x * z + s) / lead)
+            };
+            let ((u0, u1), (v0, v1)) = (extent(q.x), extent(q.y));
+            // |u| or |v| > max_tan is too wide for one map.
+            if u0 < -max_tan || u1 > max_tan || v0 < -max_tan || v1 > max_tan {
+                let angle = q.truncate().length().atan2(z).to_degrees() + (r / q.length()).asin().to_degrees();
+                return Err(surrounds_error(angle as f32));
+            }
+            x0 = x0.min(u0);
+            x1 = x1.max(u1);
+            y0 = y0.min(v0);
+            y1 = y1.max(v1);
             z_min = z_min.min(z);
             z_max = z_max.max(z);
         }
+        z_max = z_max.max(reach);
+        let (x0, x1, y0, y1, z_min, z_max) = (x0 as f32, x1 as f32, y0 as f32, y1 as f32, z_min as f32, z_max as f32);
         // Pad by 1% (and at least a small absolute amount) so silhouettes on the
         // border stay inside; a zero-width window (all points on one ray) gets a width.
-        let pad_x = 0.01 * (x1 - x0) + 1e-4;
-        let pad_y = 0.01 * (y1 - y0) + 1e-4;
-        let window = Vec4::new(x0 - pad_x, x1 + pad_x, y0 - pad_y, y1 + pad_y);
+        // Texels are square: every kernel sizes itself by one texel size
+        // (light_texel_size, the wider extent), so the narrower extent is
+        // widened about its middle to the wider one.
+        let side = (x1 - x0).max(y1 - y0);
+        let pad = 0.01 * side + 1e-4;
+        let (mx, my) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        let half = 0.5 * side + pad;
+        let window = Vec4::new(mx - half, mx + half, my - half, my + half);
         let far = z_max * 1.02;
         let near = (z_min * 0.98).max(far * 1e-6);
         Ok(Self {
@@ -311,11 +381,22 @@ impl LightFrustum {
         Self { projection: off_centre_perspective(self.window, near, self.far), near, ..*self }
     }
 
+    /// The window's width on the unit-depth plane (it is square).
+    pub fn width(&self) -> f32 {
+        (self.window.y - self.window.x).max(self.window.w - self.window.z)
+    }
+
     /// World-space size of one texel at light-view depth `z`, for a `map_size` map.
     pub fn texel_size_at(&self, z: f32, map_size: u32) -> f32 {
         let w = self.window;
         (w.y - w.x).max(w.w - w.z) * z / map_size as f32
     }
+}
+
+/// The bounding box of `points` (min, max corners; the origin for none).
+pub fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
+    let Some(first) = points.first() else { return (Vec3::ZERO, Vec3::ZERO) };
+    points.iter().fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
 }
 
 /// The part of triangle `triangle` where `n.v >= 0` for every one of the
@@ -449,7 +530,7 @@ pub fn light_sample_error(error: Error, method: &str, sample: usize, count: usiz
 
 fn surrounds_error(angle: f32) -> Error {
     Error::InvalidScene(format!(
-        "geometry surrounds the light: a vertex lies {angle:.1} degrees off the shadow-map axis, \
+        "geometry surrounds the light: a caster or its penumbra lies {angle:.1} degrees off the shadow-map axis, \
          beyond the {MAX_HALF_ANGLE_DEGREES} degrees one frustum covers; projection='auto' (the \
          default) or 'cube' renders such scenes with cube-map faces"
     ))
@@ -537,7 +618,7 @@ mod tests {
 
     #[test]
     fn auto_keeps_the_frustum_where_it_covers_and_takes_the_cube_elsewhere() {
-        let fit = |origin: Vec3, mode| LightProjection::fit(origin, &floor(), &floor(), mode);
+        let fit = |origin: Vec3, mode| LightProjection::fit(origin, 0.0, &floor(), &floor(), bounds(&floor()), mode);
         let high = fit(Vec3::new(0.0, 20.0, 0.0), ProjectionMode::Auto).unwrap();
         assert!(!high.is_cube() && high.active == 1);
         assert_eq!(high.faces[0], LightFrustum::fit(Vec3::new(0.0, 20.0, 0.0), floor().into_iter()).unwrap());
@@ -644,5 +725,57 @@ mod tests {
         // A small triangle straight below the origin: the -y face only.
         let below = [DVec3::new(-0.1, -2.0, -0.1), DVec3::new(0.1, -2.0, -0.1), DVec3::new(0.0, -2.0, 0.1)];
         assert_eq!(faces_reached(DVec3::ZERO, 0.0, below), 1 << 3);
+    }
+
+    #[test]
+    fn every_point_a_caster_may_shade_from_any_point_of_the_light_projects_into_the_window() {
+        // Points P hidden from a light point L by a point C of a caster
+        // triangle lie on the ray from L through C beyond it (issue 30: the
+        // frustum covers the casters and their penumbrae, not the floor).
+        let mut state = 0x2545f4914f6cdd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let floor: Vec<Vec3> = [(-20.0, -20.0), (20.0, -20.0), (20.0, 20.0), (-20.0, 20.0)].iter().map(|&(x, z)| Vec3::new(x, -1.0, z)).collect();
+        for case in 0..40 {
+            let radius = 0.05 + 0.6 * next();
+            let origin = DVec3::new(next() - 0.5, 2.0 + next(), next() - 0.5);
+            let tris: Vec<[DVec3; 3]> =
+                (0..4).map(|_| [0; 3].map(|_| DVec3::new(2.0 * next() - 1.0, next() * 0.8, 2.0 * next() - 1.0))).collect();
+            let casters: Vec<Vec3> = tris.iter().flatten().map(|p| p.as_vec3()).collect();
+            let mut depths = casters.clone();
+            depths.extend(&floor);
+            let f = LightFrustum::fit_balls(origin.as_vec3(), &casters, radius as f32, bounds(&depths)).unwrap();
+            let w = f.window;
+            assert!(((w.y - w.x) - (w.w - w.z)).abs() < 1e-5 * (w.y - w.x), "square texels: {w}");
+            let view = f.view.as_dmat4();
+            for _ in 0..2000 {
+                let l = loop {
+                    let d = DVec3::new(2.0 * next() - 1.0, 2.0 * next() - 1.0, 2.0 * next() - 1.0);
+                    if d.length() <= 1.0 {
+                        break origin + d * radius;
+                    }
+                };
+                let t = tris[(next() * 4.0) as usize % 4];
+                let (a, b) = (next(), next());
+                let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                let c = t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0]);
+                let p = l + (c - l) * (1.0 + 50.0 * next());
+                let q = view.transform_point3(p);
+                let (u, v) = (q.x / -q.z, q.y / -q.z);
+                assert!(-q.z > 0.0, "case {case}: {p} behind the light");
+                let inside = |x: f64, lo: f32, hi: f32| x >= f64::from(lo) && x <= f64::from(hi);
+                assert!(inside(u, w.x, w.y) && inside(v, w.z, w.w), "case {case}: {p} at ({u}, {v}) outside {w}");
+            }
+            // The far plane spans the floor; the near plane only the casters.
+            assert!(f.far > 3.0 && f.near > 0.5 * (origin.y as f32 - 0.8 - radius as f32).max(0.0), "{} {}", f.near, f.far);
+        }
+        // A light close over a wide caster: its penumbra needs more than one
+        // frustum's 80 degrees, and the fit says so.
+        let wide = [Vec3::new(-3.0, 0.0, -3.0), Vec3::new(3.0, 0.0, -3.0), Vec3::new(0.0, 0.0, 3.0)];
+        assert!(LightFrustum::fit_balls(Vec3::new(0.0, 0.5, 0.0), &wide, 0.4, bounds(&wide)).is_err());
     }
 }

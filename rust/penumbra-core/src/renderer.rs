@@ -33,7 +33,8 @@ pub enum ImageData {
     I32(Vec<i32>),
 }
 
-/// A named output image: `shape` is (rows, columns) or (rows, columns, channels).
+/// A named output image: `shape` is (rows, columns), (rows, columns, channels), or
+/// with the layers first for a cube map's intermediates (layers, rows, columns[, channels]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {
     pub name: String,

@@ -10,7 +10,7 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use numpy::ndarray::{Array2, Array3};
+use numpy::ndarray::{ArrayD, IxDyn};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use penumbra_core as core;
 use pyo3::prelude::*;
@@ -247,11 +247,15 @@ fn summary_dict<'py>(py: Python<'py>, s: &core::AdapterSummary) -> PyResult<Boun
 /// caller's input or the GPU: an `InternalError`.
 fn image_to_py<'py>(py: Python<'py>, image: core::Image) -> PyResult<Bound<'py, PyAny>> {
     let shape_err = |e: numpy::ndarray::ShapeError| InternalError::new_err(format!("image '{}': {e}", image.name));
-    Ok(match (image.shape.as_slice(), image.data) {
-        (&[h, w], core::ImageData::F32(v)) => Array2::from_shape_vec((h, w), v).map_err(shape_err)?.into_pyarray(py).into_any(),
-        (&[h, w], core::ImageData::I32(v)) => Array2::from_shape_vec((h, w), v).map_err(shape_err)?.into_pyarray(py).into_any(),
-        (&[h, w, c], core::ImageData::F32(v)) => Array3::from_shape_vec((h, w, c), v).map_err(shape_err)?.into_pyarray(py).into_any(),
-        (shape, _) => return Err(InternalError::new_err(format!("image '{}' has unexpected shape {shape:?}", image.name))),
+    // Images are 2 (height, width) to 4 (layers, height, width, channels)
+    // dimensions: a cube map's colour intermediates have all four.
+    let shape = IxDyn(&image.shape);
+    if !(2..=4).contains(&image.shape.len()) {
+        return Err(InternalError::new_err(format!("image '{}' has unexpected shape {:?}", image.name, image.shape)));
+    }
+    Ok(match image.data {
+        core::ImageData::F32(v) => ArrayD::from_shape_vec(shape, v).map_err(shape_err)?.into_pyarray(py).into_any(),
+        core::ImageData::I32(v) => ArrayD::from_shape_vec(shape, v).map_err(shape_err)?.into_pyarray(py).into_any(),
     })
 }
 

@@ -137,8 +137,10 @@ impl ShadowMapPass {
         let uniforms = uniform_buffer(ctx, "shadow_map::uniforms", &shadow_uniforms(frustum));
         let bind_group = ctx.pool.bind_group(ctx.device, "shadow_map::bind_group", &self.layout, &[Binding::Buffer(&uniforms)]);
         let (positions, indices, range) = ctx.light_geometry_for(projection, layer);
+        let side = map.width();
         let draw = |encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, pipeline, writes| {
             let mut pass = begin_depth_pass(encoder, target, writes);
+            keep_border_empty(&mut pass, projection, side);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             pass.set_vertex_buffer(0, positions.slice(..));
@@ -164,11 +166,25 @@ impl ShadowMapPass {
                     &[Binding::Texture(&near), Binding::Texture(&far)],
                 );
                 let mut pass = begin_depth_pass(encoder, target, part(false, last));
+                keep_border_empty(&mut pass, projection, side);
                 pass.set_pipeline(&self.midpoint);
                 pass.set_bind_group(0, &bind_group, &[]);
                 pass.draw(0..3, 0..1);
             }
         }
+    }
+}
+
+/// A frustum's map keeps its outermost ring of texels clear: the frustum is
+/// fitted around what may shadow something (`LightProjection::fit`), so a
+/// point projecting outside its window is lit, and reads there clamp to
+/// that ring. The 1% pad of the fit leaves the ring empty anyway from 100
+/// texels up; the scissor also holds on smaller maps and for volumes that
+/// reach past the window. Cube faces keep every texel: their reads cross
+/// seams into the neighbouring face (`map_wrap`).
+pub fn keep_border_empty(pass: &mut wgpu::RenderPass<'_>, projection: &LightProjection, size: u32) {
+    if !projection.is_cube() && size > 2 {
+        pass.set_scissor_rect(1, 1, size - 2, size - 2);
     }
 }
 

@@ -86,7 +86,7 @@ impl MethodParams for ShadowMapSettings {
                 "projection",
                 "auto",
                 &ProjectionMode::NAMES,
-                "shadow maps over one fitted frustum, six cube faces, or the frustum where it covers the geometry and the cube elsewhere",
+                "shadow maps over one frustum fitted around the casters and the penumbrae they may cast, six cube faces, or the frustum where it covers them within 80 degrees and the cube elsewhere",
             ),
             ParamSpec::choice("bias", "slope", &BiasMode::NAMES, "acne control of the shadow-map test"),
             ParamSpec::float("normal_offset", 1.0, 0.0, 100.0, "receiver offset along its normal, texels (slope bias)"),

@@ -134,7 +134,8 @@ fn horizon_fraction(t: ShadowTest, p: vec3<f32>, n: vec3<f32>) -> f32 {
 // texel may have rasterised the surface beyond it: the sliver is taken as
 // hidden only when p's texel and its 8 neighbours all hold another object.
 // The clamp keeps every read inside the map; coordinates outside a
-// frustum's window (none: the fit covers the geometry) would read its rim.
+// frustum's window (a receiver no caster can shade: light_frustum.rs) read
+// its empty rim, and the sliver is seen.
 fn horizon_sliver_seen(t: ShadowTest, objects: texture_2d_array<u32>, p: vec3<f32>, own: u32) -> bool {
     if (own == 0xffffffffu) {
         return true;

@@ -141,6 +141,7 @@ impl VolumePass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
+            super::shadow_map::keep_border_empty(&mut pass, projection, map_size);
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             draw(&mut pass);

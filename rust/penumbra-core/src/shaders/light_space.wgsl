@@ -103,10 +103,18 @@ fn view_coords(ls: LightSpace, q: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(uv.x, 1.0 - uv.y) * ls.depth.z;
 }
 
-// The map point of `p`: its layer and its coordinates there.
+// The map point of `p`: its layer and its coordinates there. A frustum is
+// fitted around what may shadow something (light_frustum.rs), so points
+// outside its window are lit, and reads there clamp to the map's empty
+// border ring; a point at or behind the light's plane is sent far outside
+// (no kernel offset brings it back in), not through the division.
 fn light_map_point(ls: LightSpace, p: vec3<f32>) -> MapPoint {
     let layer = light_layer(ls, p);
-    return MapPoint(layer, view_coords(ls, layer_frame(ls, layer, (ls.view * vec4<f32>(p, 1.0)).xyz)));
+    let q = layer_frame(ls, layer, (ls.view * vec4<f32>(p, 1.0)).xyz);
+    if (!is_cube(ls) && !(-q.z > 0.0)) {
+        return MapPoint(layer, vec2<f32>(-1e9));
+    }
+    return MapPoint(layer, view_coords(ls, q));
 }
 
 // Continuous shadow-map texel coordinates of `p` in its own layer.

@@ -29,7 +29,7 @@
 
 use std::collections::HashMap;
 
-use glam::{DVec2, DVec3, Vec3};
+use glam::{DVec2, DVec3};
 
 use crate::error::{Error, Result};
 use crate::frame::{Frame, FrameContext, Intermediate};
@@ -290,14 +290,12 @@ impl AdaptiveShadows {
     /// The fitted projection of each light point of `positions` (the maps
     /// `first + 1`.. of at most `total`, for the error's wording).
     fn fit_maps(ctx: &FrameContext<'_>, params: &AdaptiveParams, positions: &[DVec3], first: usize, total: usize) -> Result<Vec<LightProjection>> {
-        let scene = ctx.prepared;
-        let geometry: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
         positions
             .iter()
             .enumerate()
             .map(|(i, p)| {
                 let position = p.as_vec3();
-                LightProjection::fit(position, &geometry, ctx.corner_positions(), params.shadow.projection)
+                ctx.fit_projection(position, 0.0, params.shadow.projection)
                     .map_err(|e| light_sample_error(e, "adaptive", first + i + 1, total, position))
             })
             .collect()

@@ -263,7 +263,7 @@ fn level_info(level: u32) -> LevelInfo {
 // (t + 0.5) 2^l in level-0 coordinates: the neighbour face's texel holding
 // it is read (one level coarser when `widen`, for bounds: the texel grids
 // of two faces do not line up); a frustum's map holds nothing beyond its
-// edges (it covers the geometry).
+// edges (it covers the casters and their penumbrae).
 fn map_bounds(layer: i32, li: LevelInfo, t: vec2<i32>, widen: bool) -> vec2<f32> {
     let ls = shadow.light_space;
     let far = ls.depth.y;

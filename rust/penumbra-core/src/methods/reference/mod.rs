@@ -30,14 +30,14 @@
 //! resolve. Samples below a receiver's horizon count as hidden, as in the
 //! ground truth. A point light needs one sample.
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 use crate::error::Result;
 use crate::frame::Frame;
 use crate::gpu::layout;
 use crate::gpu::pool::{Binding, ResourcePool};
 use crate::gpu::pool::PooledTexture;
-use crate::light_frustum::{light_sample_error, LightProjection};
+use crate::light_frustum::light_sample_error;
 use crate::light_sampling::{camera_basis, light_samples, scene_axis, scene_sphere_samples, LightSample, Strata};
 use crate::method::{Method, MethodOutput};
 use crate::params::{MethodParams, ParamSet, ParamSpec};
@@ -147,7 +147,6 @@ impl Method for ReferenceShadows {
                 }
                 LightSampling::Sphere => scene_sphere_samples(center, radius, scene, params.n_samples, strata),
             };
-            let points: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.vertices.iter().map(|v| v.as_vec3())).collect();
             let (w, h) = ctx.size;
             // Per pixel: the weighted sum of visibilities and the sum of weights.
             let accumulated = ctx.buffer(
@@ -160,13 +159,12 @@ impl Method for ReferenceShadows {
             // Every sample's projection (its own fitted frustum, or cube faces
             // where one frustum cannot cover the scene from it) and parameter
             // blocks, in two buffers bound at one aligned block per sample.
-            let corners = ctx.corner_positions();
             let projections = samples
                 .iter()
                 .enumerate()
                 .map(|(i, s)| {
                     let position = s.position.as_vec3();
-                    LightProjection::fit(position, &points, corners, params.shadow.projection)
+                    ctx.fit_projection(position, 0.0, params.shadow.projection)
                         .map_err(|e| light_sample_error(e, "reference", i + 1, samples.len(), position))
                 })
                 .collect::<Result<Vec<_>>>()?;
