@@ -199,7 +199,7 @@ impl<'r> FrameContext<'r> {
     /// the casters and the penumbrae they may cast, or cube faces.
     pub fn fit_projection(&self, origin: Vec3, radius: f32, mode: ProjectionMode) -> Result<LightProjection> {
         let corners = self.corner_positions();
-        LightProjection::fit(origin, radius, self.caster_points(), corners, (Vec3::from(self.prepared.bounds_min), Vec3::from(self.prepared.bounds_max)), mode)
+        LightProjection::fit(origin, radius, self.caster_points(), corners, (self.prepared.bounds_min, self.prepared.bounds_max), mode)
     }
 
     /// The shadow-map projection from the light centre that `mode` asks for
