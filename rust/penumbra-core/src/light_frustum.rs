@@ -692,16 +692,21 @@ mod tests {
         assert!((at(DVec3::new(3.0, 2.0, 0.0)) - 2f64.sqrt()).abs() < 1e-12);
     }
 
-    #[test]
-    fn a_triangle_left_out_of_a_face_reaches_nothing_of_it_from_any_apex_within_reach() {
-        // A fixed pseudo-random walk over triangles and apexes (xorshift).
-        let mut state = 0x9e3779b97f4a7c15u64;
-        let mut next = || {
+    /// A fixed pseudo-random sequence in [0, 1) (xorshift64) from `state` (not 0).
+    fn xorshift(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn a_triangle_left_out_of_a_face_reaches_nothing_of_it_from_any_apex_within_reach() {
+        // A fixed pseudo-random walk over triangles and apexes, in [-1, 1).
+        let mut uniform = xorshift(0x9e3779b97f4a7c15);
+        let mut next = || uniform() * 2.0 - 1.0;
         let reach = 0.3;
         let (mut left_out, mut kept) = (0, 0);
         for _ in 0..3000 {
@@ -732,13 +737,7 @@ mod tests {
         // Points P hidden from a light point L by a point C of a caster
         // triangle lie on the ray from L through C beyond it (issue 30: the
         // frustum covers the casters and their penumbrae, not the floor).
-        let mut state = 0x2545f4914f6cdd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = xorshift(0x2545f4914f6cdd1d);
         let floor: Vec<Vec3> = [(-20.0, -20.0), (20.0, -20.0), (20.0, 20.0), (-20.0, 20.0)].iter().map(|&(x, z)| Vec3::new(x, -1.0, z)).collect();
         for case in 0..40 {
             let radius = 0.05 + 0.6 * next();
