@@ -23,7 +23,7 @@ use crate::error::{Error, Result};
 pub enum ProjectionMode {
     /// The fitted frustum where it covers the casters and their penumbrae, cube faces otherwise.
     Auto,
-    /// The fitted frustum, or an error naming the angle when it cannot cover the geometry.
+    /// The fitted frustum, or an error naming the angle when it cannot cover the casters and their penumbrae.
     Frustum,
     /// Six cube faces, whatever the geometry.
     Cube,
@@ -93,7 +93,8 @@ impl LightProjection {
     /// the window of a convex set is that of the sets it is the hull of, so
     /// every point that may lie in shadow or penumbra projects into the
     /// window; a point outside it (or behind the light) is lit, and reads
-    /// there clamp to a border the passes keep empty (`ShadowMapPass`).
+    /// there clamp to a border ring the raster passes keep empty
+    /// (`shadow_map::keep_border_empty`).
     /// The depth range still spans the box `bounds` around all geometry.
     /// With no casters the frustum is fitted around the `corners`.
     pub fn fit(origin: Vec3, radius: f32, casters: &[Vec3], corners: &[Vec3], bounds: (Vec3, Vec3), mode: ProjectionMode) -> Result<Self> {
