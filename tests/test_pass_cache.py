@@ -139,6 +139,40 @@ def test_changes_invalidate(cached: penumbra.Renderer, uncached: penumbra.Render
         assert_same(a, uncached.render(s, "pvmf", **p), what)
 
 
+
+def test_kept_geometry_is_the_same_as_fresh_and_any_change_prepares_afresh(uncached: penumbra.Renderer) -> None:
+    """The renderer keeps the last geometry it rendered (geometry_cache.rs),
+    with or without the pass cache: a render of the same meshes starts from
+    it, bit-identical to one that prepares afresh (after clear_pool); a mesh
+    changed in place, or another light, is prepared (or its casters found)
+    afresh, and renders as a fresh renderer does."""
+    r = uncached
+    base = scene()
+    methods = [("hard", {}), ("pvmf", {}), ("pcss", {"projection": "cube"})]
+    r.clear_pool()
+    fresh = {m: r.render(base, m, map_size=MAP, **p) for m, p in methods}
+    assert [f.stats["reused_geometry"] for f in fresh.values()] == [0, 1, 1]
+    for m, p in methods:
+        kept = r.render(base, m, map_size=MAP, **p)
+        assert kept.stats["reused_geometry"] == 1 and kept.reused_passes == [], m
+        assert_same(kept, fresh[m], m)
+    # Another light of the same geometry: kept geometry, its own casters.
+    smaller = base.with_light(base.light.with_radius(base.light.radius * 0.5))
+    kept = r.render(smaller, "pvmf", map_size=MAP)
+    r.clear_pool()
+    prepared = r.render(smaller, "pvmf", map_size=MAP)
+    assert (kept.stats["reused_geometry"], prepared.stats["reused_geometry"]) == (1, 0)
+    assert_same(kept, prepared, "light radius")
+    # A vertex moved in place in the scene's own array: prepared afresh, and the image follows.
+    moved = scene()
+    before = r.render(moved, "hard", map_size=MAP)
+    moved.meshes[-1].vertices[:, 1] += 0.05
+    after = r.render(moved, "hard", map_size=MAP)
+    assert after.stats["reused_geometry"] == 0
+    assert not np.array_equal(after.visibility, before.visibility)
+    r.clear_pool()
+    assert_same(after, r.render(moved, "hard", map_size=MAP), "moved in place")
+
 def _alternative(method: str, name: str, value: Any) -> Any:
     if isinstance(value, bool):
         return not value

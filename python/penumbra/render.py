@@ -214,9 +214,10 @@ class RenderResult:
     @property
     def reused_passes(self) -> list[str]:
         """Passes whose cached outputs this render reused (they have no
-        entry in ``timings``); empty without a pass cache."""
+        entry in ``timings``); empty without a pass cache. (The geometry kept
+        from an earlier render, ``stats["reused_geometry"]``, is not a pass.)"""
         prefix = "reused_"
-        return [k[len(prefix):] for k, v in self.stats.items() if k.startswith(prefix) and k != "reused_passes" and v]
+        return [k[len(prefix):] for k, v in self.stats.items() if k.startswith(prefix) and k not in ("reused_passes", "reused_geometry") and v]
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self._image(name)
@@ -260,6 +261,13 @@ class Renderer:
     method. A few entries per pass kind are kept (see docs/sweeps.md).
     ``pass_cache=False`` runs every pass of every render from scratch: use it
     to time repeated renders.
+
+    Either way, the renderer keeps the last scene geometry it rendered,
+    prepared and uploaded, with its casters for the last few lights, and a
+    render whose meshes are the same bit for bit (vertices, faces, normals,
+    materials, transforms, names) starts from them
+    (``stats["reused_geometry"]`` is 1): no per-render preparation or upload
+    of unchanged geometry. :meth:`clear_pool` forgets it.
     """
 
     def __init__(self, timing: str = "auto", pass_cache: bool = True) -> None:
@@ -285,12 +293,13 @@ class Renderer:
 
     def clear_pool(self) -> None:
         """Releases every pooled GPU resource not in use (free ones beyond
-        256 MiB are released after each render anyway)."""
+        256 MiB are released after each render anyway), and the kept
+        geometry's buffers: the next render prepares its scene afresh."""
         self._core.clear_pool()
 
     def clear_pass_cache(self) -> None:
-        """Drops every cached pass output and releases the pooled GPU memory
-        that no render holds."""
+        """Drops every cached pass output and the kept geometry, and releases
+        the pooled GPU memory that no render holds."""
         self._core.clear_pass_cache()
 
     @property

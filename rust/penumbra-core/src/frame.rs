@@ -12,7 +12,6 @@
 //! intermediate images.
 
 use std::any::Any;
-use std::cell::OnceCell;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
@@ -25,6 +24,7 @@ use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
 use crate::casters::Casters;
 use crate::light_frustum::{LightProjection, ProjectionMode};
 use crate::pass_cache::{Entry, PassCache, PassKey};
+use crate::geometry_cache::{LightGeometry, SceneGeometry};
 use crate::scene::{Camera, PreparedScene, Scene};
 use crate::silhouettes::{SilhouetteCache, SilhouetteStats};
 
@@ -113,17 +113,16 @@ pub struct FrameContext<'r> {
     pub gbuffer_key: PassKey,
     /// The geometry's hash as key bytes (zero when there is no pass cache).
     pub geometry: [u8; 8],
-    /// The scene's drawable geometry, uploaded on first use.
-    vertices: OnceCell<Arc<GeometryBuffers>>,
-    /// The triangles that can cast a shadow (`casters::caster_indices`),
-    /// their indices uploaded on first use.
-    casters: OnceCell<(PooledBuffer, Casters)>,
-    /// Per cube face around any point of the light: the caster triangles
-    /// that may reach its cone, one index buffer with a range per face.
-    face_casters: OnceCell<(PooledBuffer, Vec<std::ops::Range<u32>>)>,
-    /// Their positions, for projection fits.
-    corner_positions: OnceCell<Vec<Vec3>>,
-    caster_points: OnceCell<Vec<Vec3>>,
+    /// What the renderer keeps of the scene's geometry from render to
+    /// render (`geometry_cache.rs`): its drawable buffers, uploaded on first
+    /// use, and its corner positions, for projection fits.
+    kept: &'r SceneGeometry,
+    /// What it keeps per light of that geometry: the triangles that can cast
+    /// a shadow (`casters::caster_indices`), their indices uploaded on first
+    /// use, their points, and per cube face around any point of the light
+    /// the caster triangles that may reach its cone (one index buffer with a
+    /// range per face).
+    kept_light: &'r LightGeometry,
     /// The light centre's projections fitted so far, by mode.
     projections: std::cell::RefCell<Vec<(ProjectionMode, Arc<LightProjection>)>>,
     /// Pooled resources this frame took: in use until the frame ends.
@@ -138,7 +137,7 @@ impl<'r> FrameContext<'r> {
         silhouettes: &'r SilhouetteCache,
         pool: &'r ResourcePool,
         scene: &'r Scene,
-        prepared: &'r PreparedScene,
+        kept: (&'r SceneGeometry, &'r LightGeometry),
         camera: &'r Camera,
         gbuffer: (Arc<GBuffer>, PassKey),
         geometry: [u8; 8],
@@ -156,18 +155,15 @@ impl<'r> FrameContext<'r> {
             silhouettes,
             pool,
             scene,
-            prepared,
+            prepared: &kept.0.prepared,
             camera,
             size: (camera.width, camera.height),
             light,
             gbuffer: gbuffer.0,
             gbuffer_key: gbuffer.1,
             geometry,
-            vertices: OnceCell::new(),
-            casters: OnceCell::new(),
-            face_casters: OnceCell::new(),
-            corner_positions: OnceCell::new(),
-            caster_points: OnceCell::new(),
+            kept: kept.0,
+            kept_light: kept.1,
             projections: Default::default(),
             held: Default::default(),
         }
@@ -175,13 +171,13 @@ impl<'r> FrameContext<'r> {
 
     /// The triangle corners' positions, three per triangle.
     pub fn corner_positions(&self) -> &[Vec3] {
-        self.corner_positions.get_or_init(|| self.prepared.corners.iter().map(|c| Vec3::from(c.position)).collect())
+        self.kept.corner_positions.get_or_init(|| self.prepared.corners.iter().map(|c| Vec3::from(c.position)).collect())
     }
 
     /// The positions of the casting triangles' corners (each vertex once):
     /// what a light map's frustum is fitted around ([`LightProjection::fit`]).
     pub fn caster_points(&self) -> &[Vec3] {
-        self.caster_points.get_or_init(|| {
+        self.kept_light.caster_points.get_or_init(|| {
             let positions = &self.prepared.positions;
             let mut seen = vec![false; positions.len()];
             let mut points = Vec::new();
@@ -260,7 +256,7 @@ impl<'r> FrameContext<'r> {
     }
 
     fn face_casters(&self) -> &(PooledBuffer, Vec<std::ops::Range<u32>>) {
-        self.face_casters.get_or_init(|| {
+        self.kept_light.face_casters.get_or_init(|| {
             let casters = &self.casters().1.indices;
             let positions = &self.prepared.positions;
             let reach = self.face_reach();
@@ -297,7 +293,7 @@ impl<'r> FrameContext<'r> {
     }
 
     fn casters(&self) -> &(PooledBuffer, Casters) {
-        self.casters.get_or_init(|| {
+        self.kept_light.casters.get_or_init(|| {
             let casters = crate::casters::caster_indices(self.scene, self.prepared, &self.silhouettes.scene_topology(self.prepared), self.light.center, self.light.radius);
             (self.upload("frame::caster_indices", bytemuck::cast_slice(&casters.indices), wgpu::BufferUsages::INDEX), casters)
         })
@@ -313,7 +309,7 @@ impl<'r> FrameContext<'r> {
     }
 
     fn geometry_buffers(&self) -> &GeometryBuffers {
-        self.vertices.get_or_init(|| {
+        self.kept.buffers.get_or_init(|| {
             let upload = |label: &str, bytes: &[u8], usage| self.upload(label, bytes, usage);
             let p = self.prepared;
             let (vertex, index) = (wgpu::BufferUsages::VERTEX, wgpu::BufferUsages::INDEX);
@@ -553,8 +549,8 @@ impl<'r> Frame<'r> {
     pub(crate) fn into_record(self) -> FrameRecord<'r> {
         let mut held = self.ctx.held.into_inner();
         held.push(self.ctx.gbuffer);
-        if let Some(geometry) = self.ctx.vertices.into_inner() {
-            held.push(geometry);
+        if let Some(geometry) = self.ctx.kept.buffers.get() {
+            held.push(geometry.clone());
         }
         FrameRecord {
             profiler: self.profiler,

@@ -4,6 +4,7 @@
 pub mod error;
 pub mod casters;
 pub mod frame;
+pub mod geometry_cache;
 pub mod gpu;
 pub mod image_io;
 pub mod light_frustum;

@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::frame::{Frame, FrameContext, GBuffer};
+use crate::geometry_cache::{GeometryCache, Prepared};
 use crate::gpu::{AdapterSummary, GpuContext, Profiler, Timings};
 use crate::gpu::formats;
 use crate::gpu::pool::{PoolStats, PooledTexture, ResourcePool};
@@ -131,6 +132,8 @@ pub struct Renderer {
     shading: ShadingPass,
     /// Topology and silhouettes, cached by mesh content and light centre.
     silhouettes: SilhouetteCache,
+    /// The last geometry rendered, prepared and uploaded, and its casters per light.
+    geometry: GeometryCache,
     /// Each method rendered so far, by its registry entry, built on its first render.
     methods: Mutex<Vec<(&'static Registered, Arc<dyn DynMethod>)>>,
     cache: PassCache,
@@ -161,7 +164,7 @@ impl Renderer {
         })?;
         let methods = Mutex::default();
         let cache = PassCache::new(pass_cache, cached_passes());
-        Ok(Self { ctx, use_timestamps, pool, gbuffer, shading, silhouettes: SilhouetteCache::default(), methods, cache })
+        Ok(Self { ctx, use_timestamps, pool, gbuffer, shading, silhouettes: SilhouetteCache::default(), geometry: GeometryCache::default(), methods, cache })
     }
 
     /// Whether renders reuse cached pass outputs.
@@ -174,9 +177,11 @@ impl Renderer {
         self.cache.entries()
     }
 
-    /// Drops every cached pass output and the GPU memory it holds.
+    /// Drops every cached pass output and kept geometry, and the GPU memory
+    /// they hold.
     pub fn clear_pass_cache(&self) {
         self.cache.clear();
+        self.geometry.clear();
         self.pool.clear();
     }
 
@@ -185,8 +190,10 @@ impl Renderer {
         self.pool.stats()
     }
 
-    /// Releases every pooled resource not in use (or held by the pass cache).
+    /// Releases every pooled resource not in use (or held by the pass
+    /// cache), the kept geometry's buffers included.
     pub fn clear_pool(&self) {
+        self.geometry.clear();
         self.pool.clear();
     }
 
@@ -220,7 +227,9 @@ impl Renderer {
                 camera.width, camera.height
             )));
         }
-        let prepared = scene.prepare()?;
+        // Prepared and uploaded once while the meshes are unchanged (geometry_cache.rs).
+        let kept = self.geometry.prepare(scene)?;
+        let prepared = &kept.geometry.prepared;
         let corner_bytes = (prepared.corners.len() * std::mem::size_of::<crate::scene::CornerVertex>()) as u64;
         if prepared.corners.len() > u32::MAX as usize || corner_bytes > self.ctx.device.limits().max_buffer_size {
             return Err(Error::InvalidScene(format!(
@@ -229,7 +238,7 @@ impl Renderer {
             )));
         }
         let chosen_map_size = std::cell::Cell::new(None);
-        let result = self.ctx.scoped(|| self.record_and_read(scene, camera, method, options, &prepared, &chosen_map_size));
+        let result = self.ctx.scoped(|| self.record_and_read(scene, camera, method, options, &kept, &chosen_map_size));
         // Every handle of the frame is dropped: its resources are free again.
         self.pool.end_frame();
         let (mut result, fresh) = match result {
@@ -240,6 +249,7 @@ impl Renderer {
                 // release them all (the pass cache only takes a render's
                 // outputs once it succeeded, below).
                 if matches!(e, Error::OutOfMemory(_) | Error::Gpu(_)) {
+                    self.geometry.clear();
                     self.pool.clear();
                 }
                 return Err(match e {
@@ -267,10 +277,11 @@ impl Renderer {
         camera: &Camera,
         method: &MethodConfig,
         options: &RenderOptions,
-        prepared: &PreparedScene,
+        kept: &Prepared,
         chosen_map_size: &std::cell::Cell<Option<u32>>,
     ) -> Result<(RenderResult, FreshPasses)> {
-        let mut frame = self.begin_frame(scene, camera, prepared, options.intermediates)?;
+        let prepared = &kept.geometry.prepared;
+        let mut frame = self.begin_frame(scene, camera, kept, options.intermediates)?;
         let resolved = Self::resolve_map_size(&mut frame, method, chosen_map_size)?;
         let method = resolved.as_ref().unwrap_or(method);
         let output = self.method(method.entry()).record(&mut frame, method.typed())?;
@@ -281,6 +292,7 @@ impl Renderer {
             ("triangles".to_owned(), prepared.triangle_count as i64),
             ("degenerate_triangles".to_owned(), prepared.degenerate_triangles as i64),
             ("pass_cache".to_owned(), i64::from(self.cache.enabled())),
+            ("reused_geometry".to_owned(), i64::from(kept.reused)),
         ]);
         stats.extend(std::mem::take(&mut record.stats));
         // What was reused: a count, and a flag for each cacheable pass this method has.
@@ -297,14 +309,15 @@ impl Renderer {
 
     /// The frame of one render, with its G-buffer drawn or reused from the
     /// pass cache (keyed by the geometry, the camera's matrices and the size).
-    fn begin_frame<'r>(&'r self, scene: &'r Scene, camera: &'r Camera, prepared: &'r PreparedScene, intermediates: bool) -> Result<Frame<'r>> {
+    fn begin_frame<'r>(&'r self, scene: &'r Scene, camera: &'r Camera, kept: &'r Prepared, intermediates: bool) -> Result<Frame<'r>> {
+        let prepared = &kept.geometry.prepared;
         let device = &self.ctx.device;
         let size = (camera.width, camera.height);
         let (projection, _, _) = camera.projection(prepared.bounds_min, prepared.bounds_max);
         let view = camera.view();
         // Pass-cache keys (crate::pass_cache): the geometry is hashed once, and
         // only when there is a cache to look in.
-        let geometry = if self.cache.enabled() { crate::pass_cache::geometry_hash(prepared) } else { 0 }.to_le_bytes();
+        let geometry = if self.cache.enabled() { *kept.geometry.hash.get_or_init(|| crate::pass_cache::geometry_hash(prepared)) } else { 0 }.to_le_bytes();
         let gbuffer_key = PassKey::new(GBUFFER.name)
             .bytes(&geometry)
             .f32s(&view.to_cols_array())
@@ -320,7 +333,7 @@ impl Renderer {
             &self.silhouettes,
             &self.pool,
             scene,
-            prepared,
+            (&kept.geometry, &kept.light),
             camera,
             (gbuffer.clone(), gbuffer_key.clone()),
             geometry,

@@ -403,9 +403,15 @@ impl Camera {
 impl Scene {
     /// Validates the whole scene and builds its world-space geometry.
     pub fn prepare(&self) -> Result<PreparedScene> {
-        if self.meshes.is_empty() {
-            return Err(Error::InvalidScene("has no meshes".into()));
-        }
+        self.check_light_and_ambient()?;
+        let prepared = self.prepare_geometry()?;
+        self.check_light(&prepared)?;
+        Ok(prepared)
+    }
+
+    /// The light's own parameters and the ambient term (the checks of
+    /// [`Self::prepare`] that need no geometry).
+    pub fn check_light_and_ambient(&self) -> Result<()> {
         self.light.validate()?;
         if !finite3(&self.ambient) || self.ambient.iter().any(|&a| a < 0.0) {
             return Err(Error::InvalidScene(format!(
@@ -413,8 +419,54 @@ impl Scene {
                 self.ambient
             )));
         }
+        Ok(())
+    }
+
+    /// That no surface of `prepared` (this scene's geometry) lies within the
+    /// light's radius, nor within float32 precision of it.
+    pub fn check_light(&self, prepared: &PreparedScene) -> Result<()> {
         let light_center = dvec(self.light.center);
         let light_radius = self.light.radius as f64;
+        for mesh in &prepared.meshes {
+            for (f, face) in mesh.faces.iter().enumerate() {
+                let tri = face.map(|i| mesh.vertices[i as usize]);
+                let closest = closest_point_on_triangle(light_center, tri);
+                let distance = (closest - light_center).length();
+                // A light touching geometry has no defined irradiance there; a point light
+                // must lie strictly off every surface. The passes see these points in
+                // float32, so "touching" is closer than float32's relative precision of
+                // the coordinates involved (at most two steps of the largest): relative
+                // to their magnitude, with no absolute floor, so a scene 1e-7 across or
+                // 1e7 from the origin is judged as it is at scale 1.
+                let magnitude = light_center.abs().max_element().max(closest.abs().max_element()).max(light_radius);
+                let tolerance = f32::EPSILON as f64 * magnitude;
+                if distance <= light_radius {
+                    return Err(Error::InvalidScene(format!(
+                        "the light (center {:?}, radius {}) intersects mesh '{}' at face {f}",
+                        self.light.center, self.light.radius, mesh.name
+                    )));
+                }
+                if distance <= light_radius + tolerance {
+                    return Err(Error::InvalidScene(format!(
+                        "the light (center {:?}, radius {}) is within float32 precision ({tolerance:.3e} \
+                         world units at coordinates of {magnitude:.3e}) of mesh '{}' at face {f}: \
+                         nearer than the coordinates can resolve (move the light away, or the scene \
+                         nearer the origin)",
+                        self.light.center, self.light.radius, mesh.name
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The world-space geometry of [`Self::prepare`], without the light's
+    /// checks: what the renderer keeps while the meshes are unchanged
+    /// (`geometry_cache.rs`).
+    pub fn prepare_geometry(&self) -> Result<PreparedScene> {
+        if self.meshes.is_empty() {
+            return Err(Error::InvalidScene("has no meshes".into()));
+        }
         let mut corners = Vec::new();
         let (mut surface_vertices, mut surface_indices) = (Vec::new(), Vec::new());
         let (mut positions, mut position_indices) = (Vec::new(), Vec::new());
@@ -443,31 +495,6 @@ impl Scene {
             }
             for (f, face) in faces.iter().enumerate() {
                 let tri = face.map(|i| world[i as usize]);
-                let closest = closest_point_on_triangle(light_center, tri);
-                let distance = (closest - light_center).length();
-                // A light touching geometry has no defined irradiance there; a point light
-                // must lie strictly off every surface. The passes see these points in
-                // float32, so "touching" is closer than float32's relative precision of
-                // the coordinates involved (at most two steps of the largest): relative
-                // to their magnitude, with no absolute floor, so a scene 1e-7 across or
-                // 1e7 from the origin is judged as it is at scale 1.
-                let magnitude = light_center.abs().max_element().max(closest.abs().max_element()).max(light_radius);
-                let tolerance = f32::EPSILON as f64 * magnitude;
-                if distance <= light_radius {
-                    return Err(Error::InvalidScene(format!(
-                        "the light (center {:?}, radius {}) intersects mesh '{}' at face {f}",
-                        self.light.center, self.light.radius, mesh.name
-                    )));
-                }
-                if distance <= light_radius + tolerance {
-                    return Err(Error::InvalidScene(format!(
-                        "the light (center {:?}, radius {}) is within float32 precision ({tolerance:.3e} \
-                         world units at coordinates of {magnitude:.3e}) of mesh '{}' at face {f}: \
-                         nearer than the coordinates can resolve (move the light away, or the scene \
-                         nearer the origin)",
-                        self.light.center, self.light.radius, mesh.name
-                    )));
-                }
                 for (corner, &vi) in face.iter().enumerate() {
                     let normal = match &vertex_normals {
                         Some(normals) => normals[vi as usize],
