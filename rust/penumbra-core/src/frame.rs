@@ -24,6 +24,7 @@ use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
 use crate::casters::Casters;
 use crate::light_frustum::{LightProjection, ProjectionMode};
 use crate::pass_cache::{Entry, PassCache, PassKey};
+pub use crate::geometry_cache::GeometryBuffers;
 use crate::geometry_cache::{LightGeometry, SceneGeometry};
 use crate::scene::{Camera, PreparedScene, Scene};
 use crate::silhouettes::{SilhouetteCache, SilhouetteStats};
@@ -86,13 +87,6 @@ impl GBuffer {
             size,
         }
     }
-}
-
-/// A scene's triangles on the GPU, indexed (see [`crate::scene::PreparedScene`]).
-pub struct GeometryBuffers {
-    pub surface_vertices: PooledBuffer,
-    pub surface_indices: PooledBuffer,
-    pub positions: PooledBuffer,
 }
 
 /// What every pass of one render reads.

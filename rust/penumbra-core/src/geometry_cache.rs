@@ -28,13 +28,19 @@ use glam::Vec3;
 
 use crate::casters::Casters;
 use crate::error::Result;
-use crate::frame::GeometryBuffers;
 use crate::gpu::pool::PooledBuffer;
 use crate::scene::{Mesh, PreparedScene, Scene, SphereLight};
 
 /// Lights whose casters one geometry keeps (a sweep over the light's
 /// radius or position reuses them when it comes back to one).
 pub const LIGHTS_KEPT: usize = 8;
+
+/// A scene's triangles on the GPU, indexed (see [`PreparedScene`]).
+pub struct GeometryBuffers {
+    pub surface_vertices: PooledBuffer,
+    pub surface_indices: PooledBuffer,
+    pub positions: PooledBuffer,
+}
 
 /// A scene's prepared geometry and what is derived from it alone.
 pub struct SceneGeometry {

@@ -21,6 +21,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("passes/", 4),
     ("frame.rs", 5),
     ("pass_cache.rs", 6),
+    ("geometry_cache.rs", 6),
     ("map_size.rs", 6),
     ("casters.rs", 6),
     ("silhouettes.rs", 6),
