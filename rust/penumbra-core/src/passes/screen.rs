@@ -89,6 +89,23 @@ impl ScreenPass {
         layout::dispatch_per_pixel_writes(encoder, self.label, pipeline, bind_group, size, timestamps);
     }
 
+    /// Runs entry point `entry` over `count` workgroups (x, y, z): a pass
+    /// whose workgroups are not the per-pixel 8 x 8 (a tile each, say).
+    pub fn dispatch_workgroups(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        entry: &str,
+        bind_group: &wgpu::BindGroup,
+        count: (u32, u32, u32),
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        let pipeline = &self.pipelines.iter().find(|(e, _)| *e == entry).unwrap_or_else(|| panic!("{}: no entry point {entry}", self.label)).1;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(self.label), timestamp_writes });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups(count.0, count.1, count.2);
+    }
+
     /// Runs entry point `entry` over the workgroup counts (x, y, z) that an
     /// earlier pass wrote into `indirect` at `offset`: a pass over a list of
     /// pixels rather than the whole image.

@@ -549,6 +549,47 @@ fn polyhedron_vertices(planes: &[(DVec3, f64)]) -> Vec<DVec3> {
     out
 }
 
+/// The planes, as n.x <= d, holding every point where wedge `w`'s term can
+/// be non-zero: front <= 0, back >= 0, left >= 0, right >= 0 (the 2002
+/// interpolation's wedge); with `coverage` (the light's centre and radius),
+/// the region where the coverage term can be (`coverage_bounds`) instead.
+pub fn support_planes(w: &WedgeGpu, coverage: Option<(DVec3, f64)>) -> Vec<(DVec3, f64)> {
+    let v = |x: [f32; 4]| DVec3::new(f64::from(x[0]), f64::from(x[1]), f64::from(x[2]));
+    let (a, b) = (v(w.a), v(w.b));
+    match coverage {
+        Some((l, r)) => coverage_bounds(w, l, r),
+        None => vec![
+            (v(w.front), v(w.front).dot(a)),
+            (-v(w.back), -v(w.back).dot(a)),
+            (-v(w.left), -v(w.left).dot(a)),
+            (-v(w.right), -v(w.right).dot(b)),
+        ],
+    }
+}
+
+crate::gpu_type! {
+    /// A wedge's [`support_planes`] as `methods/wedges/tile_cull.wgsl` reads
+    /// them: (n, d) per plane, unused ones (0, 0, 0, 1).
+    #[derive(Debug, PartialEq)]
+    pub struct WedgeBoundsGpu => "WedgeBounds" in "methods/wedges/tile_cull.wgsl" {
+        pub planes: [[f32; 4]; 4],
+    }
+}
+
+/// Every wedge's [`support_planes`] for the tile cull.
+pub fn wedge_bounds(wedges: &[WedgeGpu], coverage: Option<(DVec3, f64)>) -> Vec<WedgeBoundsGpu> {
+    wedges
+        .iter()
+        .map(|w| {
+            let mut planes = [[0.0, 0.0, 0.0, 1.0]; 4];
+            for (slot, (n, d)) in planes.iter_mut().zip(support_planes(w, coverage)) {
+                *slot = [n.x as f32, n.y as f32, n.z as f32, d as f32];
+            }
+            WedgeBoundsGpu { planes }
+        })
+        .collect()
+}
+
 /// Bins `wedges` into tiles of a `size` image seen through `view_proj`
 /// (world to clip, wgpu conventions: depth in [0, 1]), clipping each wedge
 /// to the box `lo..hi` (every receiver lies in it) and to the camera's near
@@ -573,18 +614,7 @@ pub fn bin_wedges(wedges: &[WedgeGpu], view_proj: DMat4, size: (u32, u32), lo: D
             ranges.push(None);
             continue;
         }
-        // As n.x <= d: front <= 0, back >= 0, left >= 0, right >= 0, the box, the near plane.
-        // With `coverage` (the light's centre and radius), the region where
-        // the coverage term can be non-zero (`coverage_bounds`) instead.
-        let mut planes = match coverage {
-            Some((l, r)) => coverage_bounds(w, l, r),
-            None => vec![
-                (v(w.front), v(w.front).dot(a)),
-                (-v(w.back), -v(w.back).dot(a)),
-                (-v(w.left), -v(w.left).dot(a)),
-                (-v(w.right), -v(w.right).dot(b)),
-            ],
-        };
+        let mut planes = support_planes(w, coverage);
         planes.push(near);
         for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
             planes.push((axis, axis.dot(hi)));
@@ -648,6 +678,40 @@ pub fn bin_wedges(wedges: &[WedgeGpu], view_proj: DMat4, size: (u32, u32), lo: D
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_tile_cull_works_on_quarters_of_the_bins_tiles() {
+        // tile_cull.wgsl's workgroups are quarters of a bin's tile, and the
+        // visibility pass finds a pixel's quarter from the tile size.
+        assert_eq!(TILE, 16);
+        let cull = include_str!("tile_cull.wgsl");
+        assert!(cull.contains("@workgroup_size(8, 8)") && cull.contains("i = i + 64u"));
+    }
+
+    #[test]
+    fn support_planes_hold_the_wedge_in_both_intensities() {
+        // An edge under a light: the point of the floor (y = 0) on the line
+        // from the light's centre through the edge's middle lies on the hard
+        // shadow's boundary, inside the penumbra, so inside both sets of
+        // planes; points 10 away from it across the edge, either way, lie outside.
+        let l = DVec3::new(0.0, 4.0, 0.0);
+        let edges = polygon(&[(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)], 1.0, l);
+        let built = penumbra_wedges(&edges, l, 0.5, 0, true);
+        let w = &built.wedges[0];
+        let v = |x: [f32; 4]| DVec3::new(f64::from(x[0]), f64::from(x[1]), f64::from(x[2]));
+        let m = (v(w.a) + v(w.b)) * 0.5;
+        let on_floor = l + (m - l) * (l.y / (l.y - m.y));
+        let across = (v(w.b) - v(w.a)).cross(DVec3::Y).normalize() * 10.0;
+        let inside = |p: DVec3, planes: &[(DVec3, f64)]| planes.iter().all(|(n, d)| n.dot(p) <= *d + 1e-9);
+        for coverage in [None, Some((l, 0.5))] {
+            let planes = support_planes(w, coverage);
+            assert!(!planes.is_empty() && planes.len() <= 4, "{coverage:?}");
+            assert!(inside(on_floor, &planes), "{coverage:?}");
+            assert!(!inside(on_floor + across, &planes) && !inside(on_floor - across, &planes), "{coverage:?}");
+            let gpu = &wedge_bounds(std::slice::from_ref(w), coverage)[0];
+            assert_eq!(gpu.planes[planes.len()..].iter().filter(|p| **p != [0.0, 0.0, 0.0, 1.0]).count(), 0);
+        }
+    }
 
     fn edge(a: DVec3, b: DVec3, ia: u32, ib: u32) -> SilhouetteEdge {
         SilhouetteEdge { a, b, ia, ib, component: 0 }

@@ -47,6 +47,10 @@ struct WedgeSettings {
 // The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
 @group(0) @binding(12) var object_map: texture_2d_array<u32>;
 @group(0) @binding(13) var<storage, read> mesh_objects: array<u32>;
+// Per entry of tile_wedges and quarter of its tile: 0 where the tile cull
+// (tile_cull.wgsl) found the wedge holds no pixel of that quarter (its term
+// is zero at every one).
+@group(0) @binding(14) var<storage, read> tile_keep: array<u32>;
 
 // Eq. 1-2 along the side ray u: p's distances to the front plane (F <= 0
 // inside) and the back plane (B >= 0 inside), as fractions of the chord.
@@ -255,6 +259,8 @@ fn shade(pixel: ScreenPixel) {
             var terms = 0.0;
             let tile = vec2<u32>(px) / settings.tiles.x;
             let t = tile.y * settings.tiles.y + tile.x;
+            let quarter_of = (vec2<u32>(px) / (settings.tiles.x / 2u)) % 2u;
+            let quarter = quarter_of.y * 2u + quarter_of.x;
             let start = tile_offsets[t];
             let end = tile_offsets[t + 1u];
             var inside = false;
@@ -263,6 +269,9 @@ fn shade(pixel: ScreenPixel) {
             var object = -1.0;
             var object_terms = 0.0;
             for (var i = start; i < end; i = i + 1u) {
+                if (tile_keep[4u * i + quarter] == 0u) {
+                    continue;
+                }
                 let w = wedges[tile_wedges[i]];
                 var term: vec2<f32>;
                 if ((settings.tiles.z & 8u) != 0u) {
