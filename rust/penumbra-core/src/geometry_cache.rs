@@ -177,16 +177,7 @@ mod tests {
     use glam::Mat4;
 
     fn scene() -> Scene {
-        let mesh = Mesh {
-            name: "quad".into(),
-            vertices: vec![[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [-1.0, 0.0, 1.0]],
-            faces: vec![[0, 2, 1], [0, 3, 2]],
-            normals: None,
-            albedo: [0.5; 3],
-            object_id: 0,
-            transform: Mat4::IDENTITY,
-        };
-        Scene { meshes: vec![mesh], light: SphereLight { center: [0.0, 2.0, 0.0], radius: 0.5, intensity: [1.0; 3] }, ambient: [0.0; 3] }
+        crate::scene::tests::scene(crate::scene::tests::quad())
     }
 
     #[test]

@@ -596,10 +596,11 @@ pub fn closest_point_on_triangle(p: DVec3, t: [DVec3; 3]) -> DVec3 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn quad() -> Mesh {
+    /// A 2 x 2 quad at y = 0 (also the geometry cache's tests').
+    pub(crate) fn quad() -> Mesh {
         Mesh {
             name: "quad".into(),
             vertices: vec![[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [-1.0, 0.0, 1.0]],
@@ -611,7 +612,8 @@ mod tests {
         }
     }
 
-    fn scene(mesh: Mesh) -> Scene {
+    /// `mesh` under a light of radius 0.5, 2 above the origin.
+    pub(crate) fn scene(mesh: Mesh) -> Scene {
         Scene {
             meshes: vec![mesh],
             light: SphereLight { center: [0.0, 2.0, 0.0], radius: 0.5, intensity: [1.0; 3] },
