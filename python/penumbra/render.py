@@ -288,7 +288,9 @@ class Renderer:
     def pool_stats(self) -> dict[str, int]:
         """What the renderer's pool of GPU resources (textures, buffers and
         bind groups reused across renders) holds: counts, and bytes in use
-        (by a render or the pass cache) and free."""
+        (by a render, the pass cache, or the geometry kept from the last
+        render: its vertex and index buffers, with or without a pass cache)
+        and free."""
         return self._core.pool_stats()
 
     def clear_pool(self) -> None:
