@@ -74,6 +74,8 @@ def test_renders_with_its_passes_stats_and_intermediates(renderer: penumbra.Rend
         assert s["penumbra_computed"] + s["penumbra_skipped"] == s["penumbra_pixels"]
         assert sum(s[f"level_{level}_pixels"] for level in range(8)) == s["penumbra_computed"]
         assert s["hierarchy_levels"] == 9  # 256 down to 1
+        # One frustum: no cube face's edge for a kernel to cross.
+        assert s["cube_map"] == 0 and s["face_crossings"] == 0
         # The class image (0 background, 1 lit, 2 umbra, 3 penumbra
         # computed, 4 skipped) holds what the counters count.
         classes = result.images["backprojection_class"]
@@ -84,6 +86,18 @@ def test_renders_with_its_passes_stats_and_intermediates(renderer: penumbra.Rend
         assert int((classes == 0).sum()) == int((result.object_id < 0).sum())
         v = result.visibility
         assert ((v >= 0) & (v <= 1)).all()
+
+
+@pytest.mark.skipif(penumbra.scenes.meshes_folder() is None, reason="../shared/meshes is absent (the Cornell box)")
+def test_kernels_crossing_a_cube_face_are_counted(renderer: penumbra.Renderer) -> None:
+    """A light inside a room (the Cornell box, cube faces): the computed
+    pixels whose kernel crosses a face's edge are counted, each of them a
+    computed penumbra pixel (`face_crossings`: the cost a light in a room
+    pays, docs/methods/backprojection.md)."""
+    scene = penumbra.scenes.get("cornell_box", width=64, height=64)
+    s = renderer.render(scene, "backprojection").stats
+    assert s["cube_map"] == 1
+    assert 0 < s["face_crossings"] <= s["penumbra_computed"], s
 
 
 def edge_errors(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str = "backprojection", **params: Any) -> np.ndarray:

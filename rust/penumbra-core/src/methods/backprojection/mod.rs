@@ -139,7 +139,9 @@ crate::gpu_type! {
 /// coarser level, computed penumbra pixels per level (7: 7 and up), and
 /// pixels computed at a finer level than chosen because the chosen level's
 /// centre test disagreed with the map's (`visibility.wgsl`), and pixels
-/// whose receiver, steep in the map, forced a finer level (`classify.wgsl`).
+/// whose receiver, steep in the map, forced a finer level (`classify.wgsl`),
+/// and computed pixels whose kernel crosses a cube face's edge (each goes
+/// down `CROSSING_LEVELS` levels in `visibility.wgsl`).
 pub const COUNTER_NAMES: &[&str] = &[
     "lit_pixels",
     "umbra_pixels",
@@ -160,6 +162,7 @@ pub const COUNTER_NAMES: &[&str] = &[
     "level_7_pixels",
     "level_fallbacks",
     "steep_receivers",
+    "face_crossings",
 ];
 
 /// Sizes and places of the hierarchy's levels: level 0 is the map; level

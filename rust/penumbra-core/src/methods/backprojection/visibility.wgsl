@@ -17,11 +17,12 @@ struct PixelList {
 @group(0) @binding(7) var level_in: texture_2d<f32>;
 @group(0) @binding(8) var<storage, read> list: PixelList;
 @group(0) @binding(9) var visibility_out: texture_storage_2d<r32float, write>;
-@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>, 19>;
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>, 20>;
 
 const C_EDGES: u32 = 6u;
 const C_BLENDED: u32 = 7u;
 const C_FALLBACKS: u32 = 17u;
+const C_CROSSINGS: u32 = 19u;
 // Levels a kernel crossing a cube face's edge goes down (see `main`), while
 // it spans at most CROSSING_BUDGET times the kernel cap at the finer level:
 // the descent's cost (4x the samples a level) stays within 4x the cap's.
@@ -71,6 +72,9 @@ fn main(
     let size = shadow.light_space.depth.z;
     let crosses = is_cube(shadow.light_space) && (any(r.coords - h0 < vec2<f32>(0.0)) || any(r.coords + h0 > vec2<f32>(size)));
     let cross_level = select(lod, lod - min(lod, CROSSING_LEVELS), crosses);
+    if (crosses) {
+        atomicAdd(&counters[C_CROSSINGS], 1u);
+    }
     while (lod > 0u) {
         let finer = 2.0 * h0 / f32(1u << (lod - 1u));
         if (finer > MAX_FALLBACK * bp.max_kernel) {
