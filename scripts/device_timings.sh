@@ -40,7 +40,7 @@ fi
 OUT=${OUT:-out/device_timings}
 mkdir -p "$OUT"
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-$(mktemp -d)}
-BIN=.device/gpu_timings
+BIN=${BIN:-.device/gpu_timings}
 if [ ! -x "$BIN" ]; then
   echo "no $BIN: run 'bash scripts/device_timings.sh prepare' where cargo is, and carry .device" | tee "$OUT/timings.txt"
   exit 1

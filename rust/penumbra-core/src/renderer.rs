@@ -428,14 +428,14 @@ impl Renderer {
         if uses_timestamps {
             readback_start = Instant::now();
         }
-        let mut all = readback::read_all(&pending)?;
-        let ticks = if has_timestamps { all.pop() } else { None };
+        let mut all = readback::read_all_words(&pending)?;
+        let ticks = if has_timestamps { all.pop().map(|w| bytemuck::cast_slice::<u32, u8>(&w).to_vec()) } else { None };
         let mut timings = profile.timings(ticks);
         let mut bytes = all.into_iter();
-        let mut next = || readback::cast_vec::<f32>(bytes.next().unwrap_or_default());
+        let mut next = || readback::words_as::<f32>(bytes.next().unwrap_or_default());
         let (w, h) = (size.0 as usize, size.1 as usize);
         let mut images = Vec::new();
-        let rgb = |texels: &[f32]| texels.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]]).collect::<Vec<f32>>();
+        let rgb = |texels: &[f32]| readback::convert(texels, 4, 3, |t, d: &mut [f32]| d.copy_from_slice(&t[..3]));
         if targets.radiance.is_some() {
             images.push(Image { name: "radiance".into(), shape: vec![h, w, 3], data: ImageData::F32(rgb(&next())) });
         }
@@ -445,7 +445,7 @@ impl Renderer {
         if want_position {
             let position = next();
             if outputs.has("depth") {
-                let depth = position.chunks_exact(4).map(|t| t[3]).collect();
+                let depth = readback::convert(&position, 4, 1, |t, d: &mut [f32]| d[0] = t[3]);
                 images.push(Image { name: "depth".into(), shape: vec![h, w], data: ImageData::F32(depth) });
             }
             if outputs.has("position") {
@@ -457,10 +457,9 @@ impl Renderer {
             if outputs.has("normal") {
                 images.push(Image { name: "normal".into(), shape: vec![h, w, 3], data: ImageData::F32(rgb(&normal)) });
             }
-            let object_id: Vec<i32> = normal
-                .chunks_exact(4)
-                .map(|t| if t[3] < 0.0 { -1 } else { prepared.materials.get(t[3] as usize).map_or(-1, |m| m.1) })
-                .collect();
+            let object_id: Vec<i32> = readback::convert(&normal, 4, 1, |t, d: &mut [i32]| {
+                d[0] = if t[3] < 0.0 { -1 } else { prepared.materials.get(t[3] as usize).map_or(-1, |m| m.1) };
+            });
             // Known where the G-buffer's normals are read back (`normal` or `object_id` asked for).
             stats.insert("geometry_pixels".into(), object_id.iter().filter(|&&i| i >= 0).count() as i64);
             if outputs.has("object_id") {
@@ -468,13 +467,13 @@ impl Renderer {
             }
         }
         for (_, names) in &record.counters {
-            let counts: Vec<u32> = readback::cast_vec(bytes.next().unwrap_or_default());
+            let counts: Vec<u32> = bytes.next().unwrap_or_default();
             for (i, name) in names.iter().enumerate() {
                 stats.insert((*name).into(), counts.get(i).copied().unwrap_or(0) as i64);
             }
         }
         for i in &record.intermediates {
-            images.push(intermediate_image(i, readback::cast_vec::<f32>(bytes.next().unwrap_or_default())));
+            images.push(intermediate_image(i, readback::words_as::<f32>(bytes.next().unwrap_or_default())));
         }
         timings.passes.push(("readback".into(), readback_start.elapsed().as_secs_f64() * 1e3));
         drop(record.held);

@@ -114,7 +114,133 @@ pub fn read_all(pending: &[PendingReadback]) -> Result<Vec<Vec<u8>>> {
         .collect()
 }
 
-/// Reinterprets tightly packed little-endian texels as `T` (one copy, aligned).
-pub fn cast_vec<T: bytemuck::Pod>(bytes: Vec<u8>) -> Vec<T> {
-    bytemuck::pod_collect_to_vec(&bytes)
+/// As [`read_all`], into 4-byte words: every readback here is made of
+/// 4-byte texel components, counters or timestamp halves. One copy out of
+/// the mapped memory, into memory aligned for `f32`, `u32` and `i32`, so that
+/// [`words_as`] reinterprets it without another (a 1920x1080 render reads
+/// back about 74 MB: each copy and fresh allocation of it costs
+/// milliseconds; docs/gpu_timings.md).
+pub fn read_all_words(pending: &[PendingReadback]) -> Result<Vec<Vec<u32>>> {
+    pending
+        .iter()
+        .map(|p| {
+            let view = p
+                .buffer
+                .slice(..)
+                .get_mapped_range()
+                .map_err(|e| Error::Gpu(format!("mapping a readback buffer failed: {e}")))?;
+            let (row, total) = (p.row_bytes as usize, p.row_bytes as usize * p.height as usize);
+            let mut out = vec![0u32; total.div_ceil(4)];
+            let bytes: &mut [u8] = &mut bytemuck::cast_slice_mut(&mut out)[..total];
+            copy_rows(bytes, &view, row, p.padded_row_bytes as usize);
+            drop(view);
+            p.buffer.unmap();
+            Ok(out)
+        })
+        .collect()
+}
+
+/// Copies the first `row` bytes of each `padded` row of `src` into the
+/// tightly packed rows of `dst`; above 4 MiB, in up to 8 threads of the
+/// host's (bands of rows), since one core's copy out of mapped memory was
+/// most of a 1920x1080 render's wall time on a GPU.
+fn copy_rows(dst: &mut [u8], src: &[u8], row: usize, padded: usize) {
+    if row == 0 {
+        return;
+    }
+    let rows = dst.len() / row;
+    let threads = if dst.len() < 4 << 20 { 1 } else { std::thread::available_parallelism().map_or(1, |n| n.get()).min(8) };
+    let band = rows.div_ceil(threads.max(1)).max(1);
+    let copy = |dst: &mut [u8], src: &[u8]| {
+        for (d, s) in dst.chunks_exact_mut(row).zip(src.chunks(padded)) {
+            d.copy_from_slice(&s[..row]);
+        }
+    };
+    if threads <= 1 {
+        copy(dst, src);
+        return;
+    }
+    std::thread::scope(|scope| {
+        for (d, s) in dst.chunks_mut(band * row).zip(src.chunks(band * padded)) {
+            scope.spawn(move || copy(d, s));
+        }
+    });
+}
+
+/// Maps each group of `group` elements of `src` to `out` outputs with `f`,
+/// in bands over up to 8 of the host's threads above 1M groups (a
+/// 1920x1080 image's texels into RGB triples or object ids: one core's
+/// pass over them was a large part of its readback).
+pub fn convert<T: Sync, U: Send + Copy + Default>(src: &[T], group: usize, out: usize, f: impl Fn(&[T], &mut [U]) + Sync) -> Vec<U> {
+    let groups = src.len() / group.max(1);
+    let mut dst = vec![U::default(); groups * out];
+    if groups == 0 || out == 0 {
+        return dst;
+    }
+    let threads = if groups < 1 << 20 { 1 } else { std::thread::available_parallelism().map_or(1, |n| n.get()).min(8) };
+    let band = groups.div_ceil(threads);
+    let run = |s: &[T], d: &mut [U]| {
+        for (s, d) in s.chunks_exact(group).zip(d.chunks_exact_mut(out)) {
+            f(s, d);
+        }
+    };
+    if threads <= 1 {
+        run(src, &mut dst);
+    } else {
+        std::thread::scope(|scope| {
+            for (s, d) in src.chunks(band * group).zip(dst.chunks_mut(band * out)) {
+                let run = &run;
+                scope.spawn(move || run(s, d));
+            }
+        });
+    }
+    dst
+}
+
+/// Reinterprets words of [`read_all_words`] as `T` of 4 bytes (`f32`, `u32`,
+/// `i32`) in place; any other `T` is copied.
+pub fn words_as<T: bytemuck::Pod>(words: Vec<u32>) -> Vec<T> {
+    bytemuck::allocation::try_cast_vec(words).unwrap_or_else(|(_, words)| bytemuck::pod_collect_to_vec(&words))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn words_become_4_byte_texels_in_place_and_other_types_by_copy() {
+        let floats = [1.5f32, -2.0, 0.0, f32::MAX];
+        let words: Vec<u32> = floats.iter().map(|f| f.to_bits()).collect();
+        let at = words.as_ptr() as usize;
+        let back: Vec<f32> = words_as(words);
+        assert_eq!(back, floats);
+        assert_eq!(back.as_ptr() as usize, at, "reinterpreted, not copied");
+        // Timestamps: two words a tick, little-endian.
+        let ticks: Vec<u64> = words_as(vec![7, 0, 1, 2]);
+        assert_eq!(ticks, [7, (2 << 32) | 1]);
+    }
+
+    #[test]
+    fn rows_are_copied_without_their_padding_in_one_band_or_many() {
+        // 3-byte rows padded to 5, small (one thread) and over 4 MiB (bands).
+        for rows in [7usize, (4 << 20) / 3 + 11] {
+            let src: Vec<u8> = (0..rows * 5).map(|i| (i % 5 + 10 * (i / 5 % 20)) as u8).collect();
+            let mut dst = vec![0u8; rows * 3];
+            copy_rows(&mut dst, &src, 3, 5);
+            let want: Vec<u8> = src.chunks(5).flat_map(|r| r[..3].to_vec()).collect();
+            assert!(dst == want, "{rows} rows");
+        }
+    }
+
+    #[test]
+    fn conversions_give_the_same_in_one_band_or_many() {
+        for n in [5usize, (1 << 20) + 7] {
+            let texels: Vec<f32> = (0..4 * n).map(|i| i as f32).collect();
+            let rgb = convert(&texels, 4, 3, |t: &[f32], d: &mut [f32]| d.copy_from_slice(&t[..3]));
+            let want: Vec<f32> = texels.chunks(4).flat_map(|t| [t[0], t[1], t[2]]).collect();
+            assert!(rgb == want, "{n} texels");
+            let w = convert(&texels, 4, 1, |t: &[f32], d: &mut [i32]| d[0] = t[3] as i32);
+            assert!(w.iter().enumerate().all(|(i, &x)| x == (4 * i + 3) as i32), "{n} texels");
+        }
+    }
 }
