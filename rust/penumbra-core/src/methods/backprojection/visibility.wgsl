@@ -67,53 +67,96 @@ fn main(
     // caps. (Reading instead the neighbour's texels that cover the
     // footprint, at the level where 2 x 2 do, was no better: median
     // penumbra RMSE 0.049 over the generated suite against 0.046.)
-    let inside0 = centre_inside(r, 0u);
-    var fell = false;
     let size = shadow.light_space.depth.z;
     let crosses = is_cube(shadow.light_space) && (any(r.coords - h0 < vec2<f32>(0.0)) || any(r.coords + h0 > vec2<f32>(size)));
     let cross_level = select(lod, lod - min(lod, CROSSING_LEVELS), crosses);
     if (crosses) {
         atomicAdd(&counters[C_CROSSINGS], 1u);
     }
-    while (lod > 0u) {
-        let finer = 2.0 * h0 / f32(1u << (lod - 1u));
-        if (finer > MAX_FALLBACK * bp.max_kernel) {
+    // 5.1, the paper's listing: within beta of a level transition, halfway
+    // there a mix of the two levels. (Its second weight, (d / beta) / 2, is
+    // read as (1 - (1 - d) / beta) / 2, the weight that joins the first one
+    // at the transition.) Not after a fallback, and only with a neighbour
+    // level whose centre test agrees with level 0's.
+    let beta = bp.beta;
+    var other_level = lod;
+    var weight = 0.0;
+    // The centre tests in order, one call site of `centre_inside` (drivers
+    // inline every call: with one per test the pipeline took 36-39 s to
+    // compile on NVIDIA's driver and 53-59 s on lavapipe without its shader
+    // cache; docs/gpu_timings.md): stage 0 tests level 0; stage 1 goes down
+    // from the chosen level while its test disagrees (or its kernel crosses
+    // a face edge) within the caps; stage 2 tests the blend's other level.
+    var inside0 = false;
+    var fell = false;
+    var stage = 0u;
+    loop {
+        var query = 0u;
+        if (stage == 1u) {
+            if (lod == 0u) {
+                stage = 2u;
+                continue;
+            }
+            let finer = 2.0 * h0 / f32(1u << (lod - 1u));
+            if (finer > MAX_FALLBACK * bp.max_kernel) {
+                stage = 2u;
+                continue;
+            }
+            if (lod > cross_level && finer <= CROSSING_BUDGET * bp.max_kernel) {
+                lod -= 1u;
+                fell = true;
+                continue;
+            }
+            query = lod;
+        } else if (stage == 2u) {
+            if ((bp.flags & LIGHT_ADAPTIVE) != 0u && beta > 0.0 && !fell) {
+                if (d < beta && lod > 0u) {
+                    other_level = lod - 1u;
+                    weight = 0.5 * (1.0 - d / beta);
+                } else if (1.0 - d < beta && lod < top) {
+                    other_level = lod + 1u;
+                    weight = 0.5 * (1.0 - (1.0 - d) / beta);
+                }
+            }
+            other_level = select(lod, other_level, !fell);
+            if (other_level == lod) {
+                break;
+            }
+            query = other_level;
+        }
+        let inside = centre_inside(r, query);
+        if (stage == 0u) {
+            inside0 = inside;
+            stage = 1u;
+        } else if (stage == 1u) {
+            if (inside == inside0) {
+                stage = 2u;
+            } else {
+                lod -= 1u;
+                fell = true;
+            }
+        } else {
+            if (inside != inside0) {
+                other_level = lod;
+            }
             break;
         }
-        let crossing = lod > cross_level && finer <= CROSSING_BUDGET * bp.max_kernel;
-        if (!crossing && centre_inside(r, lod) == inside0) {
-            break;
-        }
-        lod -= 1u;
-        fell = true;
     }
     if (fell) {
         atomicAdd(&counters[C_FALLBACKS], 1u);
     }
-    var vis = visibility(r, lod, h0);
-    var v = vis.v;
-    var edges = vis.edges;
-    // 5.1, the paper's listing: within beta of a level transition, halfway
-    // there a mix of the two levels. (Its second weight, (d / beta) / 2, is
-    // read as (1 - (1 - d) / beta) / 2, the weight that joins the first one
-    // at the transition.)
-    let beta = bp.beta;
-    if ((bp.flags & LIGHT_ADAPTIVE) != 0u && beta > 0.0 && !fell) {
-        var other_level = lod;
-        var weight = 0.0;
-        if (d < beta && lod > 0u) {
-            other_level = lod - 1u;
-            weight = 0.5 * (1.0 - d / beta);
-        } else if (1.0 - d < beta && lod < top) {
-            other_level = lod + 1u;
-            weight = 0.5 * (1.0 - (1.0 - d) / beta);
-        }
-        if (other_level != lod && centre_inside(r, other_level) == inside0) {
-            let other = visibility(r, other_level, h0);
-            v = mix(v, other.v, weight);
-            edges += other.edges;
-            atomicAdd(&counters[C_BLENDED], 1u);
-        }
+    // The chosen level, then the other one where it blends in: one call
+    // site of `visibility` too (as `centre_inside` above).
+    let count = select(1u, 2u, other_level != lod);
+    var v = 0.0;
+    var edges = 0u;
+    for (var k = 0u; k < count; k++) {
+        let vis = visibility(r, select(lod, other_level, k == 1u), h0);
+        v = select(vis.v, mix(v, vis.v, weight), k == 1u);
+        edges += vis.edges;
+    }
+    if (count == 2u) {
+        atomicAdd(&counters[C_BLENDED], 1u);
     }
     atomicAdd(&counters[C_EDGES], edges);
     textureStore(visibility_out, px, vec4<f32>(clamp(v, 0.0, 1.0), 0.0, 0.0, 0.0));
