@@ -93,23 +93,25 @@ pub fn wait_mapped(ctx: &GpuContext, pending: &[PendingReadback]) -> Result<()> 
     ctx.wait()
 }
 
+/// `f` of a mapped buffer's bytes; unmaps it.
+fn with_mapped<T>(p: &PendingReadback, f: impl FnOnce(&[u8]) -> T) -> Result<T> {
+    let view = p.buffer.slice(..).get_mapped_range().map_err(|e| Error::Gpu(format!("mapping a readback buffer failed: {e}")))?;
+    let out = f(&view);
+    drop(view);
+    p.buffer.unmap();
+    Ok(out)
+}
+
 /// The rows of every mapped buffer, padding stripped, in order; unmaps them.
 pub fn read_all(pending: &[PendingReadback]) -> Result<Vec<Vec<u8>>> {
     pending
         .iter()
         .map(|p| {
-            let view = p
-                .buffer
-                .slice(..)
-                .get_mapped_range()
-                .map_err(|e| Error::Gpu(format!("mapping a readback buffer failed: {e}")))?;
-            let mut out = Vec::with_capacity(p.row_bytes as usize * p.height as usize);
-            for row in view.chunks_exact(p.padded_row_bytes as usize) {
-                out.extend_from_slice(&row[..p.row_bytes as usize]);
-            }
-            drop(view);
-            p.buffer.unmap();
-            Ok(out)
+            with_mapped(p, |view| {
+                let mut out = vec![0u8; p.row_bytes as usize * p.height as usize];
+                copy_rows(&mut out, view, p.row_bytes as usize, p.padded_row_bytes as usize);
+                out
+            })
         })
         .collect()
 }
@@ -124,18 +126,12 @@ pub fn read_all_words(pending: &[PendingReadback]) -> Result<Vec<Vec<u32>>> {
     pending
         .iter()
         .map(|p| {
-            let view = p
-                .buffer
-                .slice(..)
-                .get_mapped_range()
-                .map_err(|e| Error::Gpu(format!("mapping a readback buffer failed: {e}")))?;
-            let (row, total) = (p.row_bytes as usize, p.row_bytes as usize * p.height as usize);
-            let mut out = vec![0u32; total.div_ceil(4)];
-            let bytes: &mut [u8] = &mut bytemuck::cast_slice_mut(&mut out)[..total];
-            copy_rows(bytes, &view, row, p.padded_row_bytes as usize);
-            drop(view);
-            p.buffer.unmap();
-            Ok(out)
+            with_mapped(p, |view| {
+                let (row, total) = (p.row_bytes as usize, p.row_bytes as usize * p.height as usize);
+                let mut out = vec![0u32; total.div_ceil(4)];
+                copy_rows(&mut bytemuck::cast_slice_mut(&mut out)[..total], view, row, p.padded_row_bytes as usize);
+                out
+            })
         })
         .collect()
 }
