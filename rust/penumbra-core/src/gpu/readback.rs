@@ -137,60 +137,47 @@ pub fn read_all_words(pending: &[PendingReadback]) -> Result<Vec<Vec<u32>>> {
 }
 
 /// Copies the first `row` bytes of each `padded` row of `src` into the
-/// tightly packed rows of `dst`; above 4 MiB, in up to 8 threads of the
-/// host's (bands of rows), since one core's copy out of mapped memory was
-/// most of a 1920x1080 render's wall time on a GPU.
+/// tightly packed rows of `dst`.
 fn copy_rows(dst: &mut [u8], src: &[u8], row: usize, padded: usize) {
-    if row == 0 {
-        return;
+    if row > 0 {
+        in_bands(src, padded, dst, row, |s, d| d.copy_from_slice(&s[..row]));
     }
-    let rows = dst.len() / row;
-    let threads = if dst.len() < 4 << 20 { 1 } else { std::thread::available_parallelism().map_or(1, |n| n.get()).min(8) };
-    let band = rows.div_ceil(threads.max(1)).max(1);
-    let copy = |dst: &mut [u8], src: &[u8]| {
-        for (d, s) in dst.chunks_exact_mut(row).zip(src.chunks(padded)) {
-            d.copy_from_slice(&s[..row]);
-        }
-    };
-    if threads <= 1 {
-        copy(dst, src);
-        return;
-    }
-    std::thread::scope(|scope| {
-        for (d, s) in dst.chunks_mut(band * row).zip(src.chunks(band * padded)) {
-            scope.spawn(move || copy(d, s));
-        }
-    });
 }
 
-/// Maps each group of `group` elements of `src` to `out` outputs with `f`,
-/// in bands over up to 8 of the host's threads above 1M groups (a
-/// 1920x1080 image's texels into RGB triples or object ids: one core's
-/// pass over them was a large part of its readback).
+/// Maps each group of `group` elements of `src` to `out` outputs with `f`.
 pub fn convert<T: Sync, U: Send + Copy + Default>(src: &[T], group: usize, out: usize, f: impl Fn(&[T], &mut [U]) + Sync) -> Vec<U> {
-    let groups = src.len() / group.max(1);
-    let mut dst = vec![U::default(); groups * out];
-    if groups == 0 || out == 0 {
-        return dst;
+    let mut dst = vec![U::default(); src.len() / group.max(1) * out];
+    in_bands(src, group, &mut dst, out, f);
+    dst
+}
+
+/// `f` of each group of `group` elements of `src` and the `out` elements of
+/// `dst` it fills; over 4 MiB of `src`, in bands of groups over up to 8 of
+/// the host's threads. One core's pass over a 1920x1080 render's readback
+/// (copying rows out of mapped memory, texels into RGB triples or object
+/// ids) was most of its wall time on a GPU (docs/gpu_timings.md).
+fn in_bands<T: Sync, U: Send>(src: &[T], group: usize, dst: &mut [U], out: usize, f: impl Fn(&[T], &mut [U]) + Sync) {
+    let groups = if out == 0 { 0 } else { dst.len() / out };
+    if groups == 0 || group == 0 {
+        return;
     }
-    let threads = if groups < 1 << 20 { 1 } else { std::thread::available_parallelism().map_or(1, |n| n.get()).min(8) };
-    let band = groups.div_ceil(threads);
     let run = |s: &[T], d: &mut [U]| {
-        for (s, d) in s.chunks_exact(group).zip(d.chunks_exact_mut(out)) {
+        for (s, d) in s.chunks(group).zip(d.chunks_exact_mut(out)) {
             f(s, d);
         }
     };
+    let threads = if std::mem::size_of_val(src) < 4 << 20 { 1 } else { std::thread::available_parallelism().map_or(1, |n| n.get()).min(8) };
     if threads <= 1 {
-        run(src, &mut dst);
-    } else {
-        std::thread::scope(|scope| {
-            for (s, d) in src.chunks(band * group).zip(dst.chunks_mut(band * out)) {
-                let run = &run;
-                scope.spawn(move || run(s, d));
-            }
-        });
+        run(src, dst);
+        return;
     }
-    dst
+    let band = groups.div_ceil(threads);
+    std::thread::scope(|scope| {
+        for (s, d) in src.chunks(band * group).zip(dst.chunks_mut(band * out)) {
+            let run = &run;
+            scope.spawn(move || run(s, d));
+        }
+    });
 }
 
 /// Reinterprets words of [`read_all_words`] as `T` of 4 bytes (`f32`, `u32`,
