@@ -98,7 +98,11 @@ def test_adaptive_samples_the_same_points_of_the_light_when_the_scene_turns(suit
     the square's frame built from the world axes the turned room put them on
     other points of the light, split other cells and moved 2.3% of the
     pixels under the shelf (2.0% in the room's middle). With the camera's
-    frame (light_sampling::camera_basis) it moves 0.4% and 1.5% (measured,
+    frame (light_sampling::camera_basis) it moved 0.4% and 1.5%: in the
+    room's middle the light is at the centre of the scene's box, and the
+    disk's axis (towards that centre) was straight down there and rounding
+    noise in the turned copy; it is the camera's view direction now
+    (light_sampling::scene_axis), and the two move 0.4% and 0.1% (measured,
     32x32; benchmarks/rooms.py prints the same). Needs no truth: the scene
     against its turned copy."""
     moved = {}
@@ -107,7 +111,7 @@ def test_adaptive_samples_the_same_points_of_the_light_when_the_scene_turns(suit
         a = renderer.render(scene, "adaptive").visibility
         b = renderer.render(rooms.rotated(scene), "adaptive").visibility
         moved[name] = float((np.abs(a - b) > rooms.THRESHOLD).mean())
-    assert moved["room under_shelf"] <= 0.01 and moved["room middle"] <= 0.018, moved
+    assert moved["room under_shelf"] <= 0.01 and moved["room middle"] <= 0.005, moved
 
 
 # Measured at 32x32 with this truth (rooms.measure over the suite): pcss
@@ -185,11 +189,12 @@ SLOW = [
     # investigated.
     ("wedges", {}, "wedges is off the truth by 5.4% of pixels in the Cornell box lit over its tall block"),
     ("reference", {}, None),
-    # Moved 1.5% at worst (room middle), off the truth 4.0% (`python
-    # benchmarks/rooms.py --size 32 --methods adaptive`); 2.3% moved before
-    # its light square's corners were placed in the camera's frame
-    # (light_sampling::camera_basis) rather than one built from the world
-    # axes, which the rotation does not carry.
+    # Moved 0.4% at worst, off the truth 3.9% (`python benchmarks/rooms.py
+    # --size 32 --methods adaptive`); 2.3% moved before its light square's
+    # corners were placed in the camera's frame (light_sampling::camera_basis)
+    # rather than one built from the world axes, 1.5% before the disk's axis
+    # took the camera's view where the light sits at the scene box's centre
+    # (light_sampling::scene_axis).
     ("adaptive", {}, None),
     # Off the truth by 1.4% at worst, moved 1.2% (room under_shelf); with
     # 5.1's contours (coarse_contour="centres") moved 5.0%: a coarse level's

@@ -238,11 +238,22 @@ pub fn visible_cap_cos_of(center: DVec3, radius: f64, axis: DVec3, distance: f64
 }
 
 /// The unit direction from the light's centre to the centre of the scene's
-/// bounding box (straight down when they coincide): the axis the samples
-/// are placed around.
-pub fn scene_axis(center: DVec3, scene: &PreparedScene) -> DVec3 {
+/// bounding box: the axis the samples are placed around. Where the two
+/// (nearly) coincide (within 1e-3 of the box's half-diagonal: a light in a
+/// room's middle), that direction is rounding noise, and a rotated copy of
+/// the scene would get another: the camera's view direction then, which
+/// turns with the scene (issue 31; straight down where the camera has none).
+pub fn scene_axis(center: DVec3, scene: &PreparedScene, camera: &Camera) -> DVec3 {
     let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
-    (scene_center - center).try_normalize().unwrap_or(DVec3::NEG_Y)
+    let half = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
+    let to_center = scene_center - center;
+    if to_center.length() > 1e-3 * half {
+        if let Some(axis) = to_center.try_normalize() {
+            return axis;
+        }
+    }
+    let eye = DVec3::from(camera.eye.map(f64::from));
+    (DVec3::from(camera.target.map(f64::from)) - eye).try_normalize().unwrap_or(DVec3::NEG_Y)
 }
 
 /// Unit vectors `(e1, e2)` spanning the plane perpendicular to `axis` (unit),
@@ -270,10 +281,10 @@ pub fn camera_basis(axis: DVec3, camera: &Camera) -> (DVec3, DVec3) {
 /// [`sphere_samples`] of the light (`center`, `radius`) for the receivers of
 /// `scene`: around [`scene_axis`], over the cap [`visible_cap_cos_of`] gives
 /// for the scene's corners. Shared by `reference` and `raytraced`.
-pub fn scene_sphere_samples(center: DVec3, radius: f64, scene: &PreparedScene, n: u32, strata: impl Into<Strata>) -> Vec<LightSample> {
+pub fn scene_sphere_samples(center: DVec3, radius: f64, scene: &PreparedScene, camera: &Camera, n: u32, strata: impl Into<Strata>) -> Vec<LightSample> {
     let scene_center = ((scene.bounds_min + scene.bounds_max) * 0.5).as_dvec3();
     let bound = ((scene.bounds_max - scene.bounds_min) * 0.5).as_dvec3().length();
-    let axis = scene_axis(center, scene);
+    let axis = scene_axis(center, scene, camera);
     let corners = scene.meshes.iter().flat_map(|m| m.vertices.iter().copied());
     let cos_max = visible_cap_cos_of(center, radius, axis, (scene_center - center).length(), bound, corners);
     sphere_samples(center, radius, axis, cos_max, n, strata)
@@ -353,6 +364,38 @@ mod tests {
         let (a1, a2) = camera_basis(DVec3::NEG_Y, &along);
         assert!(a1.is_finite() && (a1.length() - 1.0).abs() < 1e-12 && a1.dot(DVec3::Y).abs() < 1e-12);
         assert!((a2.length() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_axis_of_a_light_at_the_scene_centre_is_the_camera_view_and_turns_with_the_scene() {
+        use crate::scene::tests::{quad, scene};
+        use glam::{Mat4, Quat};
+        // A floor at y = 0 and a ceiling at y = 4: the box's centre is the light's, (0, 2, 0).
+        let room = |turn: Quat| {
+            let mut s = scene(quad());
+            let mut ceiling = quad();
+            ceiling.transform = Mat4::from_translation(glam::Vec3::new(0.0, 4.0, 0.0));
+            s.meshes.push(ceiling);
+            for m in &mut s.meshes {
+                m.transform = Mat4::from_quat(turn) * m.transform;
+            }
+            s.light.center = (turn * glam::Vec3::from(s.light.center)).to_array();
+            s
+        };
+        let camera = Camera { eye: [0.5, 3.0, 0.8], target: [0.0, 0.5, -0.6], up: [0.0, 1.0, 0.0], fov_y_degrees: 60.0, width: 8, height: 8 };
+        let s = room(Quat::IDENTITY);
+        let axis = scene_axis(DVec3::from(s.light.center.map(f64::from)), &s.prepare_geometry().unwrap(), &camera);
+        let forward = (DVec3::from(camera.target.map(f64::from)) - DVec3::from(camera.eye.map(f64::from))).normalize();
+        assert!((axis - forward).length() < 1e-12, "{axis}");
+        let q = Quat::from_euler(glam::EulerRot::XYZ, 0.52, 0.35, 0.0);
+        let turned = room(q);
+        let turn = |p: [f32; 3]| (q * glam::Vec3::from(p)).to_array();
+        let turned_camera = Camera { eye: turn(camera.eye), target: turn(camera.target), up: turn(camera.up), ..camera };
+        let t = scene_axis(DVec3::from(turned.light.center.map(f64::from)), &turned.prepare_geometry().unwrap(), &turned_camera);
+        assert!((t - q.as_dquat() * axis).length() < 1e-5, "the axis turns with the scene: {t} against {}", q.as_dquat() * axis);
+        // Away from the centre: towards it, whatever the camera.
+        let above = scene_axis(DVec3::new(0.0, 3.0, 0.0), &s.prepare_geometry().unwrap(), &camera);
+        assert!((above - DVec3::NEG_Y).length() < 1e-12);
     }
 
     #[test]

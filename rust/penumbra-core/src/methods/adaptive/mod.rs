@@ -451,7 +451,7 @@ impl Method for AdaptiveShadows {
             return Ok(MethodOutput { visibility });
         }
         let (center, radius) = (frame.ctx.light.center, frame.ctx.light.radius);
-        let axis = scene_axis(center, frame.ctx.prepared);
+        let axis = scene_axis(center, frame.ctx.prepared, frame.ctx.camera);
         // The square's corners lie where the camera's frame puts them, so that
         // they turn with the scene (issue 31; any frame serves the paper).
         let basis = camera_basis(axis, frame.ctx.camera);

@@ -183,7 +183,7 @@ impl Method for RaytracedShadows {
         let ctx = &frame.ctx;
         let (center, radius) = (ctx.light.center, ctx.light.radius);
         let scene = ctx.prepared;
-        let samples = scene_sphere_samples(center, radius, scene, params.n_samples, params.seed);
+        let samples = scene_sphere_samples(center, radius, scene, ctx.camera, params.n_samples, params.seed);
         // A point light is one ray per pixel: nothing to adapt.
         let adaptive = params.adaptive && radius > 0.0;
         // The first pass's points: a stratified set on the unit disk (the

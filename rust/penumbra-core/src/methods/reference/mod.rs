@@ -141,11 +141,11 @@ impl Method for ReferenceShadows {
             let samples = match params.sampling {
                 LightSampling::Disk => {
                     // The disk's frame turns with the camera (and the scene): adaptive's.
-                    let points = light_samples(center, radius, camera_basis(scene_axis(center, scene), ctx.camera), params.n_samples, strata);
+                    let points = light_samples(center, radius, camera_basis(scene_axis(center, scene, ctx.camera), ctx.camera), params.n_samples, strata);
                     let weight = 1.0 / points.len() as f64;
                     points.into_iter().map(|position| LightSample { position, normal: None, weight }).collect()
                 }
-                LightSampling::Sphere => scene_sphere_samples(center, radius, scene, params.n_samples, strata),
+                LightSampling::Sphere => scene_sphere_samples(center, radius, scene, ctx.camera, params.n_samples, strata),
             };
             let (w, h) = ctx.size;
             // Per pixel: the weighted sum of visibilities and the sum of weights.

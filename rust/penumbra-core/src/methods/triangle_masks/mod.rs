@@ -204,7 +204,7 @@ impl Method for TriangleMasks {
         let ctx = &frame.ctx;
         let scene = ctx.prepared;
         let (center, radius) = (ctx.light.center, ctx.light.radius);
-        let samples = scene_sphere_samples(center, radius, scene, params.n_samples, params.seed);
+        let samples = scene_sphere_samples(center, radius, scene, ctx.camera, params.n_samples, params.seed);
         let uploaded = sample_words(&samples);
         let corners = triangle_records(ctx.corner_positions());
         let triangles = corners.len() / 4;
