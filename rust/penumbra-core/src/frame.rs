@@ -192,6 +192,21 @@ impl<'r> FrameContext<'r> {
         LightProjection::fit(origin, radius, self.caster_points(), corners, (self.prepared.bounds_min, self.prepared.bounds_max), mode)
     }
 
+    /// [`Self::fit_projection`] from each of `origins` (light samples, radius
+    /// 0), in order. Each fit passes over every caster point two or three
+    /// times (`LightFrustum::fit_balls`), for each of `reference`'s hundreds
+    /// of samples, so the fits run in bands over up to 8 host threads where
+    /// there is that much work; each fit is the same computation either way.
+    pub fn fit_projections(&self, origins: &[Vec3], radius: f32, mode: ProjectionMode) -> Vec<Result<LightProjection>> {
+        let (casters, corners) = (self.caster_points(), self.corner_positions());
+        let bounds = (self.prepared.bounds_min, self.prepared.bounds_max);
+        let fit = |o: &Vec3| LightProjection::fit(*o, radius, casters, corners, bounds, mode);
+        // Below about a million point visits, threads cost more than they save.
+        let work = origins.len() * casters.len().max(corners.len() / 3);
+        let threads = if work < 1 << 20 { 1 } else { std::thread::available_parallelism().map_or(1, |n| n.get()).min(8) };
+        map_in_bands(origins, threads, fit)
+    }
+
     /// The shadow-map projection from the light centre that `mode` asks for
     /// (fitted once per frame and mode): the fitted frustum, or cube faces.
     pub fn projection(&self, mode: ProjectionMode) -> Result<Arc<LightProjection>> {
@@ -555,5 +570,36 @@ impl<'r> Frame<'r> {
             intermediates: self.intermediates,
             held,
         }
+    }
+}
+
+/// `items.iter().map(f)`, in order, with the items split into up to
+/// `threads` bands, each mapped on its own scoped thread (a panic in one is
+/// the caller's).
+fn map_in_bands<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = threads.min(items.len());
+    if threads <= 1 {
+        return items.iter().map(f).collect();
+    }
+    let band = items.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        let f = &f;
+        let handles: Vec<_> = items.chunks(band).map(|chunk| scope.spawn(move || chunk.iter().map(f).collect::<Vec<_>>())).collect();
+        handles.into_iter().flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bands_keep_the_order_of_a_sequential_map() {
+        let items: Vec<u32> = (0..37).collect();
+        let want: Vec<u64> = items.iter().map(|&i| u64::from(i) * 3 + 1).collect();
+        for threads in [0, 1, 2, 3, 8, 64] {
+            assert_eq!(map_in_bands(&items, threads, |&i| u64::from(i) * 3 + 1), want, "{threads} threads");
+        }
+        assert!(map_in_bands(&[] as &[u32], 4, |&i| i).is_empty());
     }
 }

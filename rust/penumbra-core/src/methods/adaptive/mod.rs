@@ -290,14 +290,12 @@ impl AdaptiveShadows {
     /// The fitted projection of each light point of `positions` (the maps
     /// `first + 1`.. of at most `total`, for the error's wording).
     fn fit_maps(ctx: &FrameContext<'_>, params: &AdaptiveParams, positions: &[DVec3], first: usize, total: usize) -> Result<Vec<LightProjection>> {
-        positions
-            .iter()
+        let positions: Vec<glam::Vec3> = positions.iter().map(|p| p.as_vec3()).collect();
+        ctx.fit_projections(&positions, 0.0, params.shadow.projection)
+            .into_iter()
+            .zip(&positions)
             .enumerate()
-            .map(|(i, p)| {
-                let position = p.as_vec3();
-                ctx.fit_projection(position, 0.0, params.shadow.projection)
-                    .map_err(|e| light_sample_error(e, "adaptive", first + i + 1, total, position))
-            })
+            .map(|(i, (fitted, &position))| fitted.map_err(|e| light_sample_error(e, "adaptive", first + i + 1, total, position)))
             .collect()
     }
 

@@ -159,14 +159,13 @@ impl Method for ReferenceShadows {
             // Every sample's projection (its own fitted frustum, or cube faces
             // where one frustum cannot cover the scene from it) and parameter
             // blocks, in two buffers bound at one aligned block per sample.
-            let projections = samples
-                .iter()
+            let positions: Vec<glam::Vec3> = samples.iter().map(|s| s.position.as_vec3()).collect();
+            let projections = ctx
+                .fit_projections(&positions, 0.0, params.shadow.projection)
+                .into_iter()
+                .zip(&positions)
                 .enumerate()
-                .map(|(i, s)| {
-                    let position = s.position.as_vec3();
-                    ctx.fit_projection(position, 0.0, params.shadow.projection)
-                        .map_err(|e| light_sample_error(e, "reference", i + 1, samples.len(), position))
-                })
+                .map(|(i, (fitted, &position))| fitted.map_err(|e| light_sample_error(e, "reference", i + 1, samples.len(), position)))
                 .collect::<Result<Vec<_>>>()?;
             let align = ctx.device.limits().min_storage_buffer_offset_alignment as usize;
             let stride = |size: usize| size.div_ceil(align) * align;
