@@ -160,8 +160,10 @@ def test_write_png_exr_npy(renderer: penumbra.Renderer, tmp_path: Path) -> None:
 
 
 def test_outputs_read_back_only_what_is_asked(renderer: penumbra.Renderer) -> None:
-    """`outputs=` reads back the images named (and shades only for radiance),
-    with the same pixels as a full render."""
+    """`outputs=` reads back the images named (and shades only for radiance;
+    object ids come from their own image, written by the shading pass or
+    without radiance by the object-id pass, or from the normals where those
+    are read back), with the same pixels as a full render."""
     scene = penumbra.scenes.get(width=32, height=32)
     full = renderer.render(scene, "pcss", map_size=256)
     assert sorted(full.images) == sorted(penumbra.render.IMAGES)
@@ -172,6 +174,12 @@ def test_outputs_read_back_only_what_is_asked(renderer: penumbra.Renderer) -> No
     assert sorted(some.images) == ["depth", "object_id", "radiance"] and some.stats["geometry_pixels"] == full.stats["geometry_pixels"]
     for name in some.images:
         np.testing.assert_array_equal(some.images[name], full.images[name])
+    # Object ids without radiance or normals: their own pass and image (a
+    # quarter of the normals' bytes), the same ids as from the normals.
+    ids = renderer.render(scene, "pcss", map_size=256, outputs=["visibility", "object_id"])
+    assert "object_ids" in ids.timings and "shading" not in ids.timings and ids.stats["geometry_pixels"] == full.stats["geometry_pixels"]
+    np.testing.assert_array_equal(ids.object_id, full.object_id)
+    assert "object_ids" not in renderer.render(scene, "pcss", map_size=256, outputs=["object_id", "normal"]).timings
     assert renderer.render(scene, "pcss", map_size=256, outputs=[]).images == {}
     with pytest.raises(penumbra.ParameterError, match="no image 'visibility'"):
         some.visibility

@@ -22,7 +22,7 @@ use crate::params::ParamValue;
 use crate::pass_cache::{CachedPass, PassCache, PassKey};
 use crate::passes::gbuffer::{GBufferPass, GBUFFER};
 use crate::passes::samplers::ComparisonSamplers;
-use crate::passes::shading::ShadingPass;
+use crate::passes::shading::{object_id_texture, ObjectIdPass, ShadingPass};
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::scene::{Camera, PreparedScene, Scene};
 use crate::silhouettes::SilhouetteCache;
@@ -130,6 +130,7 @@ pub struct Renderer {
     pool: ResourcePool,
     gbuffer: GBufferPass,
     shading: ShadingPass,
+    object_ids: ObjectIdPass,
     /// Topology and silhouettes, cached by mesh content and light centre.
     silhouettes: SilhouetteCache,
     /// The last geometry rendered, prepared and uploaded, and its casters per light.
@@ -155,16 +156,16 @@ impl Renderer {
         let ctx = GpuContext::new()?;
         let pool = ResourcePool::default();
         let device = &ctx.device;
-        let (gbuffer, shading) = ctx.scoped(|| {
+        let (gbuffer, shading, object_ids) = ctx.scoped(|| {
             // The pool's shared passes, built here so that a device error
             // surfaces now and no method's first render pays for them.
             ShadowMapPass::shared(device, &pool);
             ComparisonSamplers::shared(device, &pool);
-            Ok((GBufferPass::new(device, &pool), ShadingPass::new(device, &pool)))
+            Ok((GBufferPass::new(device, &pool), ShadingPass::new(device, &pool), ObjectIdPass::new(device, &pool)))
         })?;
         let methods = Mutex::default();
         let cache = PassCache::new(pass_cache, cached_passes());
-        Ok(Self { ctx, use_timestamps, pool, gbuffer, shading, silhouettes: SilhouetteCache::default(), geometry: GeometryCache::default(), methods, cache })
+        Ok(Self { ctx, use_timestamps, pool, gbuffer, shading, object_ids, silhouettes: SilhouetteCache::default(), geometry: GeometryCache::default(), methods, cache })
     }
 
     /// Whether renders reuse cached pass outputs.
@@ -285,7 +286,7 @@ impl Renderer {
         let resolved = Self::resolve_map_size(&mut frame, method, chosen_map_size)?;
         let method = resolved.as_ref().unwrap_or(method);
         let output = self.method(method.entry()).record(&mut frame, method.typed())?;
-        let radiance = self.shade(&mut frame, &output.visibility, options.outputs)?;
+        let (radiance, object_ids) = self.shade(&mut frame, &output.visibility, options.outputs)?;
         let gbuffer = frame.ctx.gbuffer.clone();
         let mut record = frame.into_record();
         let mut stats = BTreeMap::from([
@@ -301,7 +302,12 @@ impl Renderer {
             stats.insert(format!("reused_{}", pass.name), i64::from(record.reused.contains(&pass.name)));
         }
         stats.insert("reused_passes".into(), record.reused.len() as i64);
-        let targets = Targets { radiance: radiance.as_ref().map(|r| &r.resource.texture), visibility: &output.visibility, gbuffer: &gbuffer };
+        let targets = Targets {
+            radiance: radiance.as_ref().map(|r| &r.resource.texture),
+            object_ids: object_ids.as_ref().map(|o| &o.resource.texture),
+            visibility: &output.visibility,
+            gbuffer: &gbuffer,
+        };
         let (images, timings, fresh) = self.read_back(record, targets, options.outputs, prepared, &mut stats)?;
         let result = RenderResult { method: method.name(), params: method.effective_params(), images, timings, total_ms: 0.0, stats };
         Ok((result, fresh))
@@ -361,15 +367,23 @@ impl Renderer {
     }
 
     /// Shading (SPEC section 3) of the method's visibility, only where
-    /// radiance is asked for.
-    fn shade(&self, frame: &mut Frame<'_>, visibility: &PooledTexture, outputs: Outputs) -> Result<Option<PooledTexture>> {
+    /// radiance is asked for, and the object id image (written by the same
+    /// pass; by its own where object ids are asked for without radiance and
+    /// without normals, which hold them too).
+    fn shade(&self, frame: &mut Frame<'_>, visibility: &PooledTexture, outputs: Outputs) -> Result<(Option<PooledTexture>, Option<PooledTexture>)> {
         if !outputs.has("radiance") {
-            return Ok(None);
+            if !outputs.has("object_id") || outputs.has("normal") {
+                return Ok((None, None));
+            }
+            let object_ids = object_id_texture(&frame.ctx);
+            frame.pass("object_ids", |ctx, encoder, ts| self.object_ids.record(ctx, encoder, &object_ids, ts))?;
+            return Ok((None, Some(object_ids)));
         }
         let usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let radiance = frame.ctx.texture("renderer::radiance", frame.ctx.size, formats::RADIANCE, usage);
-        frame.pass("shading", |ctx, encoder, ts| self.shading.record(ctx, encoder, visibility, &radiance, ts))?;
-        Ok(Some(radiance))
+        let object_ids = object_id_texture(&frame.ctx);
+        frame.pass("shading", |ctx, encoder, ts| self.shading.record(ctx, encoder, visibility, (&radiance, &object_ids), ts))?;
+        Ok((Some(radiance), Some(object_ids)))
     }
 
     /// Copies what `outputs` asks for (and the frame's counters, intermediates
@@ -393,10 +407,10 @@ impl Renderer {
         let copy = |encoder: &mut wgpu::CommandEncoder, texture: &wgpu::Texture, aspect| {
             readback::copy_texture(device, &self.pool, encoder, texture, aspect)
         };
-        let (want_position, want_normal) = (
-            outputs.has("depth") || outputs.has("position"),
-            outputs.has("normal") || outputs.has("object_id"),
-        );
+        // Object ids come from their own image where there is one and the
+        // normals (16 bytes a pixel against 4) are not asked for.
+        let ids_image = targets.object_ids.filter(|_| outputs.has("object_id") && !outputs.has("normal"));
+        let (want_position, want_normal) = (outputs.has("depth") || outputs.has("position"), outputs.has("normal") || (outputs.has("object_id") && ids_image.is_none()));
         let mut pending: Vec<PendingReadback> = Vec::new();
         if let Some(radiance) = targets.radiance {
             pending.push(copy(&mut encoder, radiance, all));
@@ -409,6 +423,9 @@ impl Renderer {
         }
         if want_normal {
             pending.push(copy(&mut encoder, &targets.gbuffer.normal, all));
+        }
+        if let Some(ids) = ids_image {
+            pending.push(copy(&mut encoder, ids, all));
         }
         for (buffer, names) in &record.counters {
             pending.push(readback::copy_buffer(device, &self.pool, &mut encoder, buffer, 4 * names.len() as u32));
@@ -452,15 +469,21 @@ impl Renderer {
                 images.push(Image { name: "position".into(), shape: vec![h, w, 3], data: ImageData::F32(rgb(&position)) });
             }
         }
+        let mut object_id: Option<Vec<i32>> = None;
         if want_normal {
             let normal = next();
             if outputs.has("normal") {
                 images.push(Image { name: "normal".into(), shape: vec![h, w, 3], data: ImageData::F32(rgb(&normal)) });
             }
-            let object_id: Vec<i32> = readback::convert(&normal, 4, 1, |t, d: &mut [i32]| {
+            object_id = Some(readback::convert(&normal, 4, 1, |t, d: &mut [i32]| {
                 d[0] = if t[3] < 0.0 { -1 } else { prepared.materials.get(t[3] as usize).map_or(-1, |m| m.1) };
-            });
-            // Known where the G-buffer's normals are read back (`normal` or `object_id` asked for).
+            }));
+        }
+        if ids_image.is_some() {
+            object_id = Some(readback::words_as::<i32>(bytes.next().unwrap_or_default()));
+        }
+        if let Some(object_id) = object_id {
+            // Known where object ids are read back (`normal` or `object_id` asked for).
             stats.insert("geometry_pixels".into(), object_id.iter().filter(|&&i| i >= 0).count() as i64);
             if outputs.has("object_id") {
                 images.push(Image { name: "object_id".into(), shape: vec![h, w], data: ImageData::I32(object_id) });
@@ -489,6 +512,8 @@ type FreshPasses = Vec<(&'static str, PassKey, crate::pass_cache::Entry)>;
 /// The images a render reads back besides the frame's own.
 struct Targets<'a> {
     radiance: Option<&'a wgpu::Texture>,
+    /// The object id image, where a pass wrote one.
+    object_ids: Option<&'a wgpu::Texture>,
     visibility: &'a wgpu::Texture,
     gbuffer: &'a GBuffer,
 }

@@ -1,4 +1,5 @@
 #import shaders/receiver.wgsl
+#import passes/object_ids.wgsl
 #import shaders/per_pixel.wgsl
 
 // Shading of SPEC section 3, shared by every method:
@@ -14,11 +15,11 @@ struct ShadingUniforms {
     eye: vec4<f32>,
 };
 
-@group(0) @binding(2) var visibility: texture_2d<f32>;
+@group(0) @binding(4) var visibility: texture_2d<f32>;
 // Per mesh: albedo rgb, unused.
-@group(0) @binding(3) var<storage, read> materials: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> shading: ShadingUniforms;
-@group(0) @binding(5) var radiance_out: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(5) var<storage, read> materials: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> shading: ShadingUniforms;
+@group(0) @binding(7) var radiance_out: texture_storage_2d<rgba32float, write>;
 
 // Irradiance from a uniform sphere of intensity I and radius r at distance d,
 // divided by I / d^2, as a function of cos(theta) between the normal and the
@@ -74,4 +75,5 @@ fn shade(pixel: ScreenPixel) {
         radiance = albedo / PI * irradiance * v + albedo * shading.ambient.rgb;
     }
     textureStore(radiance_out, px, vec4<f32>(radiance, 1.0));
+    store_object_id(pixel);
 }
