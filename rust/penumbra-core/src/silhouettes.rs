@@ -327,6 +327,9 @@ pub struct SilhouetteCache {
     topologies: Mutex<HashMap<u64, Arc<Topology>>>,
     /// Silhouettes per (scene, light centre), recomputed only when either moves.
     silhouettes: Mutex<HashMap<SilhouetteKey, Arc<Vec<SilhouetteEdge>>>>,
+    /// Of those, the edges the light's centre sees and how many are hidden
+    /// (`visible_from_light`: three occlusion queries an edge), per the same key.
+    visible: Mutex<HashMap<SilhouetteKey, Arc<(Vec<SilhouetteEdge>, usize)>>>,
     /// The last scene's occluder hierarchy, by its meshes' keys.
     occluders: Mutex<Option<(Vec<u64>, Arc<Occluders>)>>,
 }
@@ -401,9 +404,19 @@ impl SilhouetteCache {
         if !hidden {
             return Ok(SceneSilhouette { edges, cache_hits, hidden_edges: 0, connectivity });
         }
+        let key = (scene_key(scene), l.to_array().map(f64::to_bits), open_edges == OpenEdges::Silhouette);
+        if let Some(seen) = self.visible.lock().ok().and_then(|c| c.get(&key).cloned()) {
+            return Ok(SceneSilhouette { edges: seen.0.clone(), cache_hits, hidden_edges: seen.1, connectivity });
+        }
         let occluders = self.occluders(scene);
-        let (edges, hidden_edges) = visible_from_light(&edges, &occluders, l);
-        Ok(SceneSilhouette { edges, cache_hits, hidden_edges, connectivity })
+        let seen = Arc::new(visible_from_light(&edges, &occluders, l));
+        if let Ok(mut c) = self.visible.lock() {
+            if c.len() >= CACHE_LIMIT {
+                c.clear();
+            }
+            c.insert(key, seen.clone());
+        }
+        Ok(SceneSilhouette { edges: seen.0.clone(), cache_hits, hidden_edges: seen.1, connectivity })
     }
 
     fn occluders(&self, scene: &PreparedScene) -> Arc<Occluders> {
@@ -465,6 +478,36 @@ mod tests {
         assert_eq!((kept.len(), hidden), (top_edges.len(), 0));
         let (kept, hidden) = visible_from_light(&below_edges, &occ, l);
         assert!(kept.is_empty() && hidden == below_edges.len() && hidden > 0, "{kept:?}");
+    }
+
+    #[test]
+    fn the_cache_gives_the_edges_seen_from_the_light_as_computed_afresh() {
+        use crate::scene::Mesh;
+        let mesh = |(p, f): &(Vec<DVec3>, Vec<[u32; 3]>), name: &str| Mesh {
+            name: name.into(),
+            vertices: p.iter().map(|v| v.as_vec3().to_array()).collect(),
+            faces: f.clone(),
+            normals: None,
+            albedo: [0.5; 3],
+            object_id: 0,
+            transform: glam::Mat4::IDENTITY,
+        };
+        let top = cuboid(DVec3::new(-1.0, 3.0, -1.0), DVec3::new(1.0, 3.5, 1.0));
+        let below = cuboid(DVec3::new(-0.4, 1.0, -0.4), DVec3::new(0.4, 1.8, 0.4));
+        let mut scene = crate::scene::tests::scene(mesh(&top, "top"));
+        scene.meshes.push(mesh(&below, "below"));
+        let prepared = scene.prepare_geometry().unwrap();
+        let cache = SilhouetteCache::default();
+        for l in [DVec3::new(0.3, 6.0, 0.2), DVec3::new(4.0, 2.5, 0.0), DVec3::new(0.3, 6.0, 0.2)] {
+            let got = cache.seen_from_light(&prepared, l, OpenEdges::Error, true).unwrap();
+            let fresh = SilhouetteCache::default().seen_from_light(&prepared, l, OpenEdges::Error, true).unwrap();
+            assert_eq!((got.edges.len(), got.hidden_edges), (fresh.edges.len(), fresh.hidden_edges), "{l}");
+            assert!(got.edges.iter().zip(&fresh.edges).all(|(a, b)| (a.a, a.b) == (b.a, b.b)), "{l}");
+        }
+        // From above, the lower box's edges are hidden; from the side, some are seen.
+        let above = cache.seen_from_light(&prepared, DVec3::new(0.3, 6.0, 0.2), OpenEdges::Error, true).unwrap();
+        let side = cache.seen_from_light(&prepared, DVec3::new(4.0, 2.5, 0.0), OpenEdges::Error, true).unwrap();
+        assert!(above.hidden_edges > 0 && side.hidden_edges != above.hidden_edges, "{} {}", above.hidden_edges, side.hidden_edges);
     }
 
     #[test]
