@@ -144,9 +144,13 @@ def test_pcss_follows_the_light_over_parallel_planes(renderer: penumbra.Renderer
     # frustum's axis, straight down (the default takes cube faces here: the
     # bar and its penumbra span a window wider than a cube face's, and a
     # cube's depths run along each receiver's direction from the light).
-    with_blocker = renderer.render(scene, "pcss", intermediates=True, projection="frustum")
-    found = with_blocker["pcss_blocker_depth"][:, columns][region & (with_blocker["pcss_blocker_depth"][:, columns] > 0)]
-    np.testing.assert_allclose(np.median(found), 3.9, atol=0.02)
+    # Both blocker depths find it: every blocker lies on the bar's top, so
+    # the farthest inside the cone to the light (the default) is the mean
+    # (blocker_depth="mean", Fernando's).
+    for depth in ("cone_farthest", "mean"):
+        with_blocker = renderer.render(scene, "pcss", intermediates=True, projection="frustum", blocker_depth=depth)
+        found = with_blocker["pcss_blocker_depth"][:, columns][region & (with_blocker["pcss_blocker_depth"][:, columns] > 0)]
+        np.testing.assert_allclose(np.median(found), 3.9, atol=0.02, err_msg=depth)
 
 
 def test_pcss_beats_hard_against_ground_truth(renderer: penumbra.Renderer, cache: Any) -> None:
@@ -196,7 +200,7 @@ def test_effective_parameters_are_recorded(renderer: penumbra.Renderer) -> None:
     pcf = renderer.render(scene, "pcf").params
     assert {k: pcf[k] for k in ("kernel", "samples", "seed", "filter")} == {"kernel": 5.0, "samples": 4, "seed": 0, "filter": "bilinear"}
     pcss = renderer.render(scene, "pcss", sampling="poisson").params
-    assert {k: pcss[k] for k in ("blocker_samples", "filter_samples", "seed", "filter", "sampling", "search", "blocker_test")} == {
+    assert {k: pcss[k] for k in ("blocker_samples", "filter_samples", "seed", "filter", "sampling", "search", "blocker_test", "blocker_depth")} == {
         "blocker_samples": 4,
         "filter_samples": 6,
         "seed": 0,
@@ -204,6 +208,7 @@ def test_effective_parameters_are_recorded(renderer: penumbra.Renderer) -> None:
         "sampling": "poisson",
         "search": "scaled",
         "blocker_test": "behind",
+        "blocker_depth": "cone_farthest",
     }
     assert pcss["map_size"] == 2048 and pcss["bias"] == "slope"
 

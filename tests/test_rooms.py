@@ -118,9 +118,11 @@ def test_adaptive_samples_the_same_points_of_the_light_when_the_scene_turns(suit
 # moves at most 0.1% of pixels (1.1% with the plane test) against
 # reference's 0.6% (64 samples, maps of 256), pcf at most 1.4%;
 # before the fix pcss moved up to 6.0% and pcf 3.5%. Off the truth pcss
-# (blocker_test "behind", the default) is at most 6.2% (room under_shelf,
-# where the shelf 2 radii above the light makes Fernando's parallel-plane
-# estimate narrow the far walls' penumbra), 1.6% elsewhere; with the
+# (blocker_test "behind" and blocker_depth "cone_farthest", the defaults)
+# is at most 3.1% (room under_shelf), 2.1% elsewhere; with the mean
+# blocker depth (Fernando's) 6.7% under the shelf, whose underside,
+# from its edge in to over the light, pulls the mean nearer the light than
+# the edge that casts the far walls' penumbra, and widens it; with the
 # paper's plane test 6.5% at the ceiling corner and under the shelf, where
 # its search and filter take the walls beside a receiver for blockers
 # (`python benchmarks/rooms.py --size 32 --methods pcss [--param
@@ -131,7 +133,7 @@ def test_adaptive_samples_the_same_points_of_the_light_when_the_scene_turns(suit
 # it is 1.3%. pcf (a fixed kernel, no penumbra estimate) is not held to the
 # truth.
 PCSS_OFF: dict[str, float] = {}
-PCSS_OFF_ELSEWHERE = 0.07
+PCSS_OFF_ELSEWHERE = 0.05
 
 
 @pytest.mark.parametrize("method", ["pcss", "pcf"])
@@ -150,8 +152,10 @@ def test_cube_face_filters_do_not_depend_on_where_the_faces_cut(renderer: penumb
         )
 
 
-@pytest.mark.xfail(strict=True, reason="pcss is off the truth by 6.2% of pixels under the shelf (1.6% elsewhere): the shelf 2 radii above the light, Fernando's parallel-plane estimate narrows the far walls' penumbra")
 def test_pcss_is_within_five_percent_of_the_truth_in_every_room(renderer: penumbra.Renderer, suite: dict[str, penumbra.Scene], images: dict) -> None:
+    """Issue 31's target for the method `render` uses by default: 3.1% at
+    worst (under the shelf), 6.7% there with the mean blocker depth
+    (blocker_depth="mean", the paper's)."""
     check_rows(measured(renderer, suite, images, "pcss"), images, 0.05, 0.02)
 
 

@@ -83,6 +83,21 @@ impl BlockerTest {
     }
 }
 
+/// The blocker depth d_b of step 2 from the blockers the search found:
+/// `Mean`, Fernando's, their mean depth; `ConeFarthest`, the depth of the
+/// farthest from the light of those inside the cone from the receiver to
+/// the light (the mean where none is): the occluder's rim as the receiver
+/// sees it, not the faces between it and the light (`visibility.wgsl`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BlockerDepth {
+    Mean,
+    ConeFarthest,
+}
+
+impl BlockerDepth {
+    const NAMES: [&'static str; 2] = ["cone_farthest", "mean"];
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct PcssParams {
     pub shadow: ShadowMapSettings,
@@ -94,6 +109,7 @@ pub struct PcssParams {
     pub filter: Filter,
     pub sampling: Sampling,
     pub blocker_test: BlockerTest,
+    pub blocker_depth: BlockerDepth,
     pub search: Search,
     /// The light above the receiver's tangent plane bounds its visibility,
     /// and is all it sees where the centre has set below that plane (the
@@ -118,6 +134,8 @@ crate::gpu_type! {
         pub(crate) horizon: u32,
         /// 1: `PcssParams::area`.
         pub(crate) area: u32,
+        /// 1: `BlockerDepth::ConeFarthest`; 0: `Mean`.
+        pub(crate) cone_farthest: u32,
     }
 }
 
@@ -151,6 +169,12 @@ impl MethodParams for PcssParams {
                 "where the blocker search's taps go: scaled (the receiver's texel, then as many taps per octave of the search radius, so that blockers near the receiver are found under a large search radius), uniform (the paper's: over the search disk)",
             ),
             ParamSpec::choice(
+                "blocker_depth",
+                "cone_farthest",
+                &BlockerDepth::NAMES,
+                "the blocker depth d_b of the penumbra estimate: cone_farthest (of the blockers found, those inside the cone from the receiver to the light, the farthest from the light: the occluder's rim as the receiver sees it; the mean where none is), mean (the paper's: the mean of the blockers found)",
+            ),
+            ParamSpec::choice(
                 "estimate",
                 "pcf",
                 &["pcf", "area"],
@@ -177,6 +201,7 @@ impl MethodParams for PcssParams {
                 "behind" => BlockerTest::Behind,
                 _ => BlockerTest::Plane,
             },
+            blocker_depth: if p.choice("blocker_depth") == "mean" { BlockerDepth::Mean } else { BlockerDepth::ConeFarthest },
             search: if p.choice("search") == "uniform" { Search::Uniform } else { Search::Scaled },
             horizon: p.bool("horizon"),
             area: p.choice("estimate") == "area",
@@ -239,6 +264,7 @@ impl Method for PercentageCloserSoftShadows {
                 scaled: u32::from(params.search == Search::Scaled),
                 horizon: u32::from(params.horizon),
                 area: u32::from(params.area),
+                cone_farthest: u32::from(params.blocker_depth == BlockerDepth::ConeFarthest),
             };
             let sampling = ctx.parameters("pcss::sampling_uniforms", &sampling);
             let samplers = ComparisonSamplers::shared(ctx.device, ctx.pool);

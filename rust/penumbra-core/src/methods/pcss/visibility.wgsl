@@ -28,6 +28,8 @@ struct PcssSampling {
     horizon: u32,
     // 1: estimate "area"; 0: "pcf" (the paper's).
     area: u32,
+    // 1: blocker_depth "cone_farthest"; 0: "mean" (the paper's).
+    cone_farthest: u32,
 };
 
 struct PcssPixel {
@@ -186,6 +188,9 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssP
     let nb = pcss.blocker_samples;
     var blocker_sum = 0.0;
     var blockers = 0u;
+    // blocker_depth "cone_farthest": the largest depth of the blockers
+    // inside the cone from the receiver to the light; 0 while none is.
+    var cone_farthest = 0.0;
     // search "scaled" (a departure from Fernando 2005, step 1, whose taps
     // cover the search disk uniformly) spreads the taps by scale: a point at depth z
     // can hide part of the light only within the cone's projection there,
@@ -232,6 +237,12 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssP
         if (blocker) {
             blocker_sum += b.z;
             blockers += 1u;
+            if (pcss.cone_farthest == 1u && b.z > cone_farthest) {
+                let extent = light_texel_size(ls, b.z);
+                if (in_light_cone(p, b.stored.q, extent / max(length(b.stored.q - p), extent))) {
+                    cone_farthest = b.z;
+                }
+            }
         }
     }
     // The paper's early exit: no blocker, fully lit.
@@ -243,7 +254,19 @@ fn pcss_visibility(px: vec2<u32>, p: vec3<f32>, n: vec3<f32>, own: u32) -> PcssP
     // only geometry beyond the fitted near plane), so d_b > 0. On cube faces
     // a blocker's depth along w may fall below its distance, `near`; the
     // clamp keeps d_b > 0 there.
-    let d_b = max(blocker_sum / f32(blockers), near);
+    var d_b = max(blocker_sum / f32(blockers), near);
+    // blocker_depth "cone_farthest" (a departure from Fernando 2005, step
+    // 1's mean): the penumbra at the receiver is cast by the occluder's rim
+    // as the receiver sees it. Of the blockers found, only those inside the
+    // cone from the receiver to the light hide any of it (in_light_cone),
+    // and the rim is the farthest of them from the light: the faces between
+    // it and the light (a shelf's underside from its edge in to over the
+    // light, a blob's top) are nearer, and their mean, with the blockers
+    // outside the cone, widens the penumbra. Where none of the taps is in
+    // the cone (sparse taps in the outer penumbra), the mean.
+    if (cone_farthest > 0.0) {
+        d_b = max(cone_farthest, near);
+    }
     out.blocker = d_b;
 
     // 2. Penumbra estimate (Fernando 2005, step 2, parallel planes):
