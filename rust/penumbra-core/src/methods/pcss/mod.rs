@@ -4,7 +4,9 @@
 //! Pass 1 is the shadow map of `hard`. Pass 2, per camera pixel: a blocker
 //! search over the region of the map that can hold occluders of the light
 //! (its radius is the light's, scaled by `(d_r - z_near) / d_r` onto the
-//! near plane), averaging the raw depths nearer than the receiver's plane;
+//! near plane), averaging the raw depths nearer than the receiver's plane
+//! (`blocker_depth = "mean"`; by default the farthest of those inside the
+//! cone from the receiver to the light, `BlockerDepth`);
 //! no blocker means fully lit (the paper's early exit); otherwise the
 //! penumbra width `w_p = (d_r - d_b) w_light / d_b` sets the diameter of a
 //! percentage-closer filter (`passes/pcf_taps.wgsl` taps). Taps are disk

@@ -5,7 +5,9 @@
 // Method `pcss`: percentage-closer soft shadows (Fernando 2005; surveyed in
 // Cournia ch. 3, and the basis of PVMF's filter, 5.2). Per pixel:
 //   1. blocker search: the mean light depth d_b of the map texels, in a region
-//      around the receiver, that are nearer the light than the receiver's plane;
+//      around the receiver, that are nearer the light than the receiver's plane
+//      (by default the farthest of them inside the receiver's light cone:
+//      blocker_depth "cone_farthest");
 //      no blocker found: fully lit (the paper's early exit);
 //   2. penumbra estimate: w_p = (d_r - d_b) w_light / d_b (parallel planes);
 //   3. percentage-closer filtering over a disk of that width (passes/pcf_taps.wgsl).
