@@ -247,7 +247,12 @@ def test_seams_match_the_frustum_within_its_resolution_error(renderer: penumbra.
     frustum within two texels of a face boundary is within the frustum's own
     resolution error there (its largest difference from a map four times
     finer), or, for methods that jitter their taps, their sampling noise
-    (seed 0 against 1), whichever is larger, plus 0.05."""
+    (seed 0 against 1), whichever is larger (issue 31). Measured (band of 71
+    pixels; difference, resolution error, noise): hard 0, 0, 0; pcf 0.153,
+    0.153, 0.022 (at that pixel the cube equals the finer map); pcss 0.047,
+    0.089, 0.056; reference 0.054, 0.108, 0.110; adaptive 0.043, 0.083, 0;
+    pvm 0.010, 0.010, 0; pvmf 0.090, 0.120, 0.007; wedges 0, 0, 0;
+    backprojection 0.045, 0.055, 0. The 1e-6 is for the ties."""
     scene, params, frustum, cube = seam_renders(renderer, method, 256)
     finer = renderer.render(scene, method, projection="frustum", **{**params, "map_size": 1024})
     band = seam_band(cube, np.asarray(scene.light.center, dtype=np.float32), 256, texels=2)
@@ -258,6 +263,6 @@ def test_seams_match_the_frustum_within_its_resolution_error(renderer: penumbra.
         other_cube = renderer.render(scene, method, projection="cube", **{**params, "seed": 1})
         allowance = max(allowance, np.abs(frustum.visibility - other.visibility)[band].max(), np.abs(cube.visibility - other_cube.visibility)[band].max())
     difference = np.abs(cube.visibility - frustum.visibility)[band].max()
-    if difference > allowance + 0.05:
+    if difference > allowance + 1e-6:
         leave_images(f"seam {method}", cube.visibility, frustum.visibility, ARTIFACTS)
-    assert difference <= allowance + 0.05, (method, difference, allowance)
+    assert difference <= allowance + 1e-6, (method, difference, allowance)
