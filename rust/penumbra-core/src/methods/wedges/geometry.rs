@@ -483,14 +483,19 @@ pub fn coverage_term(w: &WedgeGpu, p: DVec3, c: DVec3, r: f64) -> f64 {
         return 0.0;
     }
     let z = axis / dist;
-    // Clip the edge to the half-space in front of p (depth along z >= eps).
+    // Clip the edge to the slab in front of p (depth along z >= eps) and
+    // up to the light's plane (depth <= dist): the part beyond the light
+    // hides nothing from p (the shader's `coverage_term`).
     let eps = 1e-4 * dist;
     let (da, db) = ((a - p).dot(z), (b - p).dot(z));
-    if da < eps && db < eps {
+    if (da < eps && db < eps) || (da > dist && db > dist) {
         return 0.0;
     }
     let cut = |x: DVec3, dx: f64, y: DVec3, dy: f64| if dx >= eps { x } else { x + (y - x) * ((eps - dx) / (dy - dx)) };
     let (a, b) = (cut(a, da, b, db), cut(b, db, a, da));
+    let (da, db) = (da.max(eps), db.max(eps));
+    let far = |x: DVec3, dx: f64, y: DVec3, dy: f64| if dx <= dist { x } else { x + (y - x) * ((dx - dist) / (dx - dy)) };
+    let (a, b) = (far(a, da, b, db), far(b, db, a, da));
     // The disk seen from p, in the plane through c: radius of the tangent cone there.
     let radius = r * dist / (dist * dist - r * r).sqrt();
     let (e1, e2) = z.any_orthonormal_pair();
@@ -913,6 +918,27 @@ mod tests {
             }
         }
         assert!(checked > 40, "{checked} penumbra points");
+    }
+
+    #[test]
+    fn an_edge_beyond_the_light_hides_nothing() {
+        // A square 2 above the light, seen from the ground below the light:
+        // the light lies between the points and every edge. Projected from
+        // them onto the light's plane the loop would surround the disk's
+        // centre (before the clip it gave each point about half the light
+        // per edge crossing the disk).
+        let l = DVec3::new(0.2, 5.0, 0.1);
+        let square = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)];
+        let w = penumbra_wedges(&polygon(&square, 7.0, l), l, 0.6, 0, false);
+        for p in [DVec3::new(0.3, 0.0, 0.2), DVec3::new(2.0, 0.0, -1.0), DVec3::new(0.2, 4.0, 0.1)] {
+            for x in &w.wedges {
+                assert_eq!(coverage_term(x, p, l, 0.6), 0.0, "{p}");
+            }
+        }
+        // Below the light the same square's terms still count (the closed
+        // loop's sum is the test above).
+        let below = penumbra_wedges(&polygon(&square, 3.0, l), l, 0.6, 0, false);
+        assert!(below.wedges.iter().any(|x| coverage_term(x, DVec3::new(0.3, 0.0, 0.2), l, 0.6) != 0.0));
     }
 
     #[test]

@@ -160,17 +160,32 @@ fn coverage_term(w: Wedge, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
     let eps = 1e-4 * dist;
     var a = w.a.xyz;
     var b = w.b.xyz;
-    let da = dot(a - p, z);
-    let db = dot(b - p, z);
-    if (da < eps && db < eps) {
+    var da = dot(a - p, z);
+    var db = dot(b - p, z);
+    // Only the part of the edge between p and the light's plane (the
+    // disk's, at depth dist) can hide the light from p: an edge (or its
+    // part) beyond it, a silhouette with the light between it and p, hides
+    // nothing (beyond the 2003 paper's projection, which has every edge in
+    // front of the light; here a receiver beyond the light, as a room's
+    // wall behind a light beside a block, took half the light off).
+    if ((da < eps && db < eps) || (da > dist && db > dist)) {
         return vec2<f32>(0.0, 0.0);
     }
     // Clip to depth >= eps in front of p (db - da != 0 when exactly one end is behind).
     if (da < eps) {
         a = a + (b - a) * ((eps - da) / (db - da));
+        da = eps;
     }
     if (db < eps) {
         b = b + (a - b) * ((eps - db) / (da - db));
+        db = eps;
+    }
+    // And to depth <= dist (db - da != 0 when exactly one end is beyond).
+    if (da > dist) {
+        a = a + (b - a) * ((da - dist) / (da - db));
+    }
+    if (db > dist) {
+        b = b + (a - b) * ((db - dist) / (db - da));
     }
     // dist > r * 1.0001: the root is positive.
     let radius = r * dist / sqrt(dist * dist - r * r);
