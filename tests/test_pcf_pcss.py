@@ -253,3 +253,18 @@ def test_pcss_keeps_walls_lit_beside_a_light_in_a_corner(renderer: penumbra.Rend
     truth = renderer.render(scene, "reference", n_samples=256, map_size=rooms.TRUTH_MAP_SIZE).visibility
     off = {bt: float((np.abs(renderer.render(scene, "pcss", blocker_test=bt).visibility - truth) > 0.1).mean()) for bt in ("plane", "behind")}
     assert off["behind"] <= 0.02 and off["plane"] <= 0.02, off
+
+
+def test_the_papers_settings_are_parameters_the_defaults_depart_from(renderer: penumbra.Renderer) -> None:
+    """`penumbra.comparison.PAPER` names, per method, parameters whose
+    defaults depart from the paper, with the paper's values: each is a
+    parameter of the method, its default differs, and a render takes them."""
+    from penumbra.comparison import PAPER
+
+    assert {"pcss", "pvmf"} <= set(PAPER)
+    scene = penumbra.scenes.get(width=16, height=16)
+    for method, params in PAPER.items():
+        defaults = penumbra.method_info(method).defaults()
+        assert all(k in defaults and defaults[k] != v for k, v in params.items()), (method, params, defaults)
+        assert renderer.render(scene, method, map_size=256, **params).params.items() >= params.items()
+

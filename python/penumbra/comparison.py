@@ -84,10 +84,14 @@ class Timing:
 
 #: The paper's values of the parameters whose defaults depart from it for
 #: accuracy, by method: the faithful version that the tests and benchmarks
-#: measure beside the defaults (docs/methods/pvmf.md). The repairs for real
-#: meshes (``repairs``, ``bias``, ``blur_min_width``) keep their defaults here.
+#: measure beside the defaults (docs/methods/pvmf.md, docs/methods/pcss.md).
+#: The repairs for real meshes (``repairs``, ``bias``, ``blur_min_width``)
+#: keep their defaults here.
 PAPER: dict[str, dict[str, Any]] = {
     "pvmf": {"kernel": "square", "n_blur": 12, "offsets": "unit", "umbra": "filter", "s_e": 0.5, "mask_size": "map"},
+    # Fernando 2005: the plane test, uniform search taps, the mean blocker
+    # depth, and the centre's test alone (no horizon repair).
+    "pcss": {"blocker_test": "plane", "search": "uniform", "blocker_depth": "mean", "horizon": False},
 }
 
 
