@@ -180,6 +180,14 @@ def test_outputs_read_back_only_what_is_asked(renderer: penumbra.Renderer) -> No
     assert "object_ids" in ids.timings and "shading" not in ids.timings and ids.stats["geometry_pixels"] == full.stats["geometry_pixels"]
     np.testing.assert_array_equal(ids.object_id, full.object_id)
     assert "object_ids" not in renderer.render(scene, "pcss", map_size=256, outputs=["object_id", "normal"]).timings
+    # Object ids that are not the meshes' indices, through each path: the
+    # object-id pass, the shading pass, and the normals.
+    renumbered = penumbra.Scene([penumbra.Mesh(m.vertices, m.faces, object_id=9 - 4 * i, name=m.name) for i, m in enumerate(scene.meshes)], scene.light, scene.camera)
+    paths = [["visibility", "object_id"], ["radiance", "object_id"], ["object_id", "normal"]]
+    got = [renderer.render(renumbered, "hard", map_size=256, outputs=o).object_id for o in paths]
+    assert set(np.unique(got[2])) == {-1} | {9 - 4 * i for i in range(len(scene.meshes))}
+    for ids in got[:2]:
+        np.testing.assert_array_equal(ids, got[2])
     assert renderer.render(scene, "pcss", map_size=256, outputs=[]).images == {}
     with pytest.raises(penumbra.ParameterError, match="no image 'visibility'"):
         some.visibility
