@@ -7,6 +7,9 @@ use glam::DVec3;
 
 /// Triangles per leaf at most.
 const LEAF: usize = 4;
+/// Levels split by the surface area heuristic; below them median splits,
+/// which bound the depth at `SAH_DEPTH + log2(triangles / LEAF) + 2`.
+const SAH_DEPTH: usize = 24;
 
 #[derive(Debug, Clone, Copy)]
 struct Node {
@@ -26,12 +29,15 @@ pub struct Occluders {
 }
 
 impl Occluders {
-    /// Builds the hierarchy (median splits on the longest axis of the centroids).
+    /// Builds the hierarchy: binned surface-area-heuristic splits (a floor's
+    /// large triangles apart from a mesh's small ones, so that boxes stay
+    /// tight), median splits on the centroids' longest axis past `SAH_DEPTH`
+    /// levels or where no bin boundary separates the centroids.
     pub fn build(triangles: Vec<[DVec3; 3]>) -> Self {
         let mut out = Self { nodes: Vec::with_capacity(2 * triangles.len() / LEAF + 1), triangles };
         if !out.triangles.is_empty() {
             let n = out.triangles.len();
-            out.split(0, n);
+            out.split(0, n, 0);
         }
         out
     }
@@ -53,6 +59,37 @@ impl Occluders {
         self.triangles.is_empty()
     }
 
+    /// The triangles in the hierarchy's order (a leaf's are contiguous).
+    pub fn triangles(&self) -> &[[DVec3; 3]] {
+        &self.triangles
+    }
+
+    /// The nodes depth first (a node's left child follows it): box, then
+    /// `(first triangle, count)` for a leaf (count > 0, at most 4) or
+    /// `(right child, 0)` for an inner node. The root is node 0.
+    pub fn nodes(&self) -> impl Iterator<Item = (DVec3, DVec3, u32, u32)> + '_ {
+        self.nodes.iter().map(|n| (n.lo, n.hi, n.start, n.count))
+    }
+
+    /// Nodes on the longest path from the root to a leaf (0 when empty):
+    /// at most `SAH_DEPTH + log2(triangles / LEAF) + 2`; a traversal's
+    /// stack of `depth()` entries never overflows.
+    pub fn depth(&self) -> usize {
+        fn down(nodes: &[Node], i: usize) -> usize {
+            let n = nodes[i];
+            if n.count > 0 {
+                1
+            } else {
+                1 + down(nodes, i + 1).max(down(nodes, n.start as usize))
+            }
+        }
+        if self.nodes.is_empty() {
+            0
+        } else {
+            down(&self.nodes, 0)
+        }
+    }
+
     fn bounds(triangles: &[[DVec3; 3]]) -> (DVec3, DVec3) {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -65,8 +102,9 @@ impl Occluders {
         (lo, hi)
     }
 
-    /// Builds the node for triangles[start..end]; returns its index.
-    fn split(&mut self, start: usize, end: usize) -> usize {
+    /// Builds the node for triangles[start..end] at `depth` (the root's 0);
+    /// returns its index.
+    fn split(&mut self, start: usize, end: usize, depth: usize) -> usize {
         let (lo, hi) = Self::bounds(&self.triangles[start..end]);
         let index = self.nodes.len();
         self.nodes.push(Node { lo, hi, start: start as u32, count: (end - start) as u32 });
@@ -76,20 +114,96 @@ impl Occluders {
         let centroid = |t: &[DVec3; 3]| (t[0] + t[1] + t[2]) / 3.0;
         let (clo, chi) = self.triangles[start..end].iter().map(centroid).fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(a, b), c| (a.min(c), b.max(c)));
         let extent = chi - clo;
-        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        let longest = if extent.x >= extent.y && extent.x >= extent.z {
             0
         } else if extent.y >= extent.z {
             1
         } else {
             2
         };
-        let mid = (end - start) / 2;
-        self.triangles[start..end].select_nth_unstable_by(mid, |a, b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
-        self.split(start, start + mid);
-        let right = self.split(start + mid, end);
+        let mid = match (depth < SAH_DEPTH).then(|| self.sah_split(start, end, clo, extent)).flatten() {
+            Some(mid) => mid,
+            None => {
+                let mid = (end - start) / 2;
+                self.triangles[start..end].select_nth_unstable_by(mid, |a, b| centroid(a)[longest].total_cmp(&centroid(b)[longest]));
+                mid
+            }
+        };
+        self.split(start, start + mid, depth + 1);
+        let right = self.split(start + mid, end, depth + 1);
         self.nodes[index].start = right as u32;
         self.nodes[index].count = 0;
         index
+    }
+
+    /// The surface area heuristic over `BINS` bins of the centroids per
+    /// axis (Wald, "On fast Construction of SAH-based Bounding Volume
+    /// Hierarchies", 2007): the cut that minimises the children's areas
+    /// times their triangle counts. Partitions triangles[start..end] at it
+    /// and returns the left part's length; None when no cut separates the
+    /// centroids (all in one bin on every axis), for a median split.
+    fn sah_split(&mut self, start: usize, end: usize, clo: DVec3, extent: DVec3) -> Option<usize> {
+        const BINS: usize = 16;
+        let centroid = |t: &[DVec3; 3]| (t[0] + t[1] + t[2]) / 3.0;
+        let area = |lo: DVec3, hi: DVec3| {
+            let d = (hi - lo).max(DVec3::ZERO);
+            d.x * d.y + d.y * d.z + d.z * d.x
+        };
+        let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        let mut best: Option<(f64, usize, usize)> = None;
+        for axis in 0..3 {
+            // An axis along which the centroids do not spread has no cut.
+            if !(extent[axis] > 0.0) {
+                continue;
+            }
+            let scale = BINS as f64 / extent[axis];
+            let bin = |t: &[DVec3; 3]| (((centroid(t)[axis] - clo[axis]) * scale) as usize).min(BINS - 1);
+            let mut counts = [0usize; BINS];
+            let mut boxes = [empty; BINS];
+            for t in &self.triangles[start..end] {
+                let b = bin(t);
+                counts[b] += 1;
+                for p in t {
+                    boxes[b].0 = boxes[b].0.min(*p);
+                    boxes[b].1 = boxes[b].1.max(*p);
+                }
+            }
+            // Areas and counts of the bins left of each cut, then right of it.
+            let mut left = [(0.0, 0usize); BINS];
+            let (mut b, mut n) = (empty, 0);
+            for i in 0..BINS - 1 {
+                b = (b.0.min(boxes[i].0), b.1.max(boxes[i].1));
+                n += counts[i];
+                left[i] = (if n > 0 { area(b.0, b.1) } else { 0.0 }, n);
+            }
+            let (mut b, mut n) = (empty, 0);
+            for i in (1..BINS).rev() {
+                b = (b.0.min(boxes[i].0), b.1.max(boxes[i].1));
+                n += counts[i];
+                let (left_area, left_n) = left[i - 1];
+                if left_n == 0 || n == 0 {
+                    continue;
+                }
+                let cost = left_area * left_n as f64 + area(b.0, b.1) * n as f64;
+                if best.map_or(true, |(c, _, _)| cost < c) {
+                    best = Some((cost, axis, i));
+                }
+            }
+        }
+        let (_, axis, cut) = best?;
+        let scale = BINS as f64 / extent[axis];
+        let bin = |t: &[DVec3; 3]| (((centroid(t)[axis] - clo[axis]) * scale) as usize).min(BINS - 1);
+        // Partition: the triangles of bins below `cut` first.
+        let slice = &mut self.triangles[start..end];
+        let mut i = 0;
+        for j in 0..slice.len() {
+            if bin(&slice[j]) < cut {
+                slice.swap(i, j);
+                i += 1;
+            }
+        }
+        // Both sides hold triangles (the cut's counts were both positive).
+        Some(i)
     }
 
     /// Whether a triangle crosses the open segment from `from` to `to`
@@ -213,5 +327,26 @@ mod tests {
             blocked += usize::from(brute);
         }
         assert!(blocked > 100 && blocked < 1900, "{blocked}");
+        // The flattened nodes: every triangle in exactly one leaf, inside
+        // its box and its ancestors'; the depth within the median bound.
+        let nodes: Vec<_> = occ.nodes().collect();
+        let mut seen = vec![0; occ.len()];
+        fn visit(nodes: &[(DVec3, DVec3, u32, u32)], tris: &[[DVec3; 3]], i: usize, lo: DVec3, hi: DVec3, seen: &mut [u32]) {
+            let (a, b, start, count) = nodes[i];
+            assert!(a.cmpge(lo).all() && b.cmple(hi).all());
+            if count > 0 {
+                for t in start..start + count {
+                    seen[t as usize] += 1;
+                    assert!(tris[t as usize].iter().all(|p| p.cmpge(a).all() && p.cmple(b).all()));
+                }
+            } else {
+                visit(nodes, tris, i + 1, a, b, seen);
+                visit(nodes, tris, start as usize, a, b, seen);
+            }
+        }
+        visit(&nodes, occ.triangles(), 0, nodes[0].0, nodes[0].1, &mut seen);
+        assert!(seen.iter().all(|&k| k == 1));
+        assert!(occ.depth() <= SAH_DEPTH + (300f64 / 4.0).log2().ceil() as usize + 2, "{}", occ.depth());
+        assert_eq!(Occluders::build(Vec::new()).depth(), 0);
     }
 }
