@@ -23,6 +23,7 @@ use crate::gpu::{PassTimestamps, Profiler};
 use crate::gpu::pool::{PooledBuffer, PooledTexture, ResourcePool, TextureKey};
 use crate::casters::Casters;
 use crate::light_frustum::{LightProjection, ProjectionMode};
+use crate::occluders::Occluders;
 use crate::pass_cache::{Entry, PassCache, PassKey};
 pub use crate::geometry_cache::GeometryBuffers;
 use crate::geometry_cache::{LightGeometry, SceneGeometry};
@@ -166,6 +167,19 @@ impl<'r> FrameContext<'r> {
     /// The triangle corners' positions, three per triangle.
     pub fn corner_positions(&self) -> &[Vec3] {
         self.kept.corner_positions.get_or_init(|| self.prepared.corners.iter().map(|c| Vec3::from(c.position)).collect())
+    }
+
+    /// A bounding volume hierarchy over the triangles of
+    /// [`Self::corner_positions`] (every triangle, in the hierarchy's own
+    /// order; corners exact in float32), kept with the geometry.
+    pub fn corner_hierarchy(&self) -> Arc<Occluders> {
+        self.kept
+            .corner_hierarchy
+            .get_or_init(|| {
+                let corners = self.corner_positions();
+                Arc::new(Occluders::build(corners.chunks_exact(3).map(|t| [t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()]).collect()))
+            })
+            .clone()
     }
 
     /// The positions of the casting triangles' corners (each vertex once):

@@ -29,6 +29,7 @@ use glam::Vec3;
 use crate::casters::Casters;
 use crate::error::Result;
 use crate::gpu::pool::PooledBuffer;
+use crate::occluders::Occluders;
 use crate::scene::{Mesh, PreparedScene, Scene, SphereLight};
 
 /// Lights whose casters one geometry keeps (a sweep over the light's
@@ -53,6 +54,8 @@ pub struct SceneGeometry {
     pub(crate) buffers: OnceLock<Arc<GeometryBuffers>>,
     /// The triangle corners' positions, three per triangle.
     pub(crate) corner_positions: OnceLock<Vec<Vec3>>,
+    /// A bounding volume hierarchy over those triangles, on first use.
+    pub(crate) corner_hierarchy: OnceLock<Arc<Occluders>>,
     /// Per light, most recent last.
     lights: Mutex<Vec<Arc<LightGeometry>>>,
 }
@@ -101,6 +104,7 @@ impl SceneGeometry {
             hash: OnceLock::new(),
             buffers: OnceLock::new(),
             corner_positions: OnceLock::new(),
+            corner_hierarchy: OnceLock::new(),
             lights: Mutex::default(),
         })
     }

@@ -24,15 +24,24 @@
 //!   sphere a sample's projection from the point moves with the point. A
 //!   pair first tests the light's sphere against the four planes: wholly
 //!   outside one (no sample tested) or wholly inside all (every bit set).
-//! - **Binning:** the paper rasterises each triangle's shadow volume from the
-//!   light's bounding box into the receivers' alias-free shadow map; here
-//!   triangles are binned to 16 x 16-pixel screen tiles on the GPU by a
-//!   conservative test against the hull of the tile's receiver box and the
-//!   light's sphere (masks.wgsl, `can_shadow`), through groups of 8 x 8
-//!   tiles: counted, offset by a prefix sum, then listed. A tile whose list
-//!   would pass the adapter's storage-buffer limit takes every triangle
-//!   (`tiles_overflowed`), never fewer.
-//! - The `masks` pass culls its tile's list again per 8 x 8-pixel workgroup
+//! - **How triangles reach a pixel** (`traversal`): the paper rasterises
+//!   each triangle's shadow volume from the light's bounding box into the
+//!   receivers' alias-free shadow map, so a triangle reaches every pixel its
+//!   volume covers, and a fine mesh gives each pixel thousands. The default,
+//!   `"bvh"`, turns the order round: per pixel, a walk of a bounding volume
+//!   hierarchy over the triangles (`Occluders`: binned surface-area splits)
+//!   with the samples of one word still open whose segments from the point
+//!   can meet a node's box, as a ray tracer walks 32 rays at once, so the
+//!   cost follows the segments (tens of triangles per pixel) and not the
+//!   triangles. `"tiles"` keeps the paper's per-triangle order: triangles
+//!   binned to 16 x 16-pixel screen tiles on the GPU by a conservative test
+//!   against the hull of the tile's receiver box and the light's sphere
+//!   (masks.wgsl, `can_shadow`), through groups of 8 x 8 tiles: counted,
+//!   offset by a prefix sum, then listed; a tile whose list would pass the
+//!   adapter's storage-buffer limit takes every triangle
+//!   (`tiles_overflowed`), never fewer. `"all"` is every triangle at every
+//!   pixel. The three give the same image bit for bit.
+//! - With tiles, the `masks` pass culls its tile's list again per 8 x 8-pixel workgroup
 //!   against the receiver boxes of its 4 x 4-pixel quarters, and each pair
 //!   first tests the triangle's bounding ball against the pixel's cone
 //!   around the light; the samples are ordered into words of nearby samples
@@ -63,10 +72,34 @@ pub struct TriangleMaskParams {
     pub seed: u64,
     /// Relative to the scene's size, as `raytraced`'s.
     pub ray_offset: f64,
-    /// Tile lists (true) or every triangle at every pixel (false: the
-    /// unculled cost, and a check that binning drops nothing).
-    pub binning: bool,
+    /// How triangles reach a pixel.
+    pub traversal: Traversal,
 }
+
+/// How triangles reach a pixel's mask; the image is the same bit for bit
+/// (a mask is an OR, and each way leaves out only triangles that set no bit).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Traversal {
+    /// Per pixel and word of 32 samples, a walk of a bounding volume
+    /// hierarchy over the triangles with the word's samples still open.
+    Bvh,
+    /// The triangles binned to screen tiles (the paper's per-triangle order).
+    Tiles,
+    /// Every triangle at every pixel: the unculled cost.
+    All,
+}
+
+crate::gpu_type! {
+    pub struct BvhNodeUniform => "BvhNode" in "methods/triangle_masks/masks.wgsl" {
+        pub(crate) lo: [f32; 3],
+        pub(crate) start: u32,
+        pub(crate) hi: [f32; 3],
+        pub(crate) count: u32,
+    }
+}
+
+/// masks.wgsl's STACK: the deepest hierarchy its walk holds.
+const STACK: usize = 48;
 
 crate::gpu_type! {
     pub struct MaskSettingsUniform => "MaskSettings" in "methods/triangle_masks/masks.wgsl" {
@@ -83,8 +116,9 @@ crate::gpu_type! {
 /// (64 bits), [4..6] pairs tested sample by sample (64 bits), [6] pixels
 /// whose masks filled before their lists ended, [7] tiles with receivers
 /// and no triangle that can shadow them, [8..10] pairs whose triangle's
-/// bounding ball meets the pixel's cone around the light (64 bits).
-const COUNTERS: usize = 10;
+/// bounding ball meets the pixel's cone around the light (64 bits),
+/// [10..12] nodes of the hierarchy entered (64 bits).
+const COUNTERS: usize = 12;
 
 /// The samples in the order of their mask bits, then one ball per word of
 /// 32 (`LightSample` position: centre xyz, radius w) around its samples. The
@@ -167,7 +201,12 @@ impl MethodParams for TriangleMaskParams {
                 0.01,
                 "segment origins' offset along the normal, relative to the scene's size (raytraced's ray_offset)",
             ),
-            ParamSpec::bool("binning", true, "triangles binned to 16x16-pixel tiles by where they can shadow (False: every triangle at every pixel)"),
+            ParamSpec::choice(
+                "traversal",
+                "bvh",
+                &["bvh", "tiles", "all"],
+                "how triangles reach a pixel: a bounding volume hierarchy walked with the samples still open (bvh), lists of 16x16-pixel tiles (tiles), every triangle (all); the same image",
+            ),
         ]
     }
 
@@ -176,7 +215,11 @@ impl MethodParams for TriangleMaskParams {
             n_samples: p.int("n_samples") as u32,
             seed: p.int("seed") as u64,
             ray_offset: p.float("ray_offset"),
-            binning: p.bool("binning"),
+            traversal: match p.choice("traversal") {
+                "tiles" => Traversal::Tiles,
+                "all" => Traversal::All,
+                _ => Traversal::Bvh,
+            },
         })
     }
 }
@@ -189,24 +232,34 @@ impl Method for TriangleMasks {
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         // Reads the settings, the samples and the triangles; writes bounds,
-        // bins, the tile list, the counters and visibility.
+        // bins, the tile list, the counters and visibility; reads the hierarchy.
         let bindings = [
             layout::parameters, layout::storage_buffer, layout::storage_buffer,
             layout::storage_buffer_rw, layout::storage_buffer_rw, layout::storage_buffer_rw, layout::storage_buffer_rw, layout::visibility_storage,
+            layout::storage_buffer,
         ];
-        let entry_points = ["tile_bounds", "group_bounds", "count_bins", "scan_bins", "fill_bins", "masks"];
+        let entry_points = ["tile_bounds", "group_bounds", "count_bins", "scan_bins", "fill_bins", "masks", "masks_bvh"];
         Self { pass: ScreenPass::new(device, pool, "triangle_masks::pass", crate::shader!("masks.wgsl"), &bindings, &entry_points) }
     }
 
-    /// Passes `tile_bounds`, `count_bins` (count and prefix sum),
-    /// `fill_bins` and `masks`; without binning, `masks` alone.
+    /// Pass `masks_bvh` (traversal "bvh"); passes `tile_bounds`,
+    /// `count_bins` (count and prefix sum), `fill_bins` and `masks`
+    /// ("tiles"); `masks` alone ("all").
     fn record(&self, frame: &mut Frame<'_>, params: &TriangleMaskParams) -> Result<MethodOutput> {
         let ctx = &frame.ctx;
         let scene = ctx.prepared;
         let (center, radius) = (ctx.light.center, ctx.light.radius);
         let samples = scene_sphere_samples(center, radius, scene, ctx.camera, params.n_samples, params.seed);
         let uploaded = sample_words(&samples);
-        let corners = triangle_records(ctx.corner_positions());
+        // In the hierarchy's order for "bvh" (its leaves' triangles contiguous).
+        let hierarchy = (params.traversal == Traversal::Bvh).then(|| ctx.corner_hierarchy());
+        let corners = match &hierarchy {
+            Some(h) => {
+                let ordered: Vec<Vec3> = h.triangles().iter().flat_map(|t| t.map(|p| p.as_vec3())).collect();
+                triangle_records(&ordered)
+            }
+            None => triangle_records(ctx.corner_positions()),
+        };
         let triangles = corners.len() / 4;
         let triangle_bytes = std::mem::size_of_val(corners.as_slice()) as u64;
         ctx.check_buffer(Self::NAME, &format!("the scene's {triangles} triangles"), triangle_bytes, "the triangle count (decimate the meshes)")?;
@@ -235,7 +288,7 @@ impl Method for TriangleMasks {
             &MaskSettingsUniform {
                 light: [c[0], c[1], c[2], ctx.light.radius_f32],
                 offset: [offset as f32, margin as f32, 0.0, 0.0],
-                counts: [samples.len() as u32, triangles as u32, capacity, u32::from(params.binning)],
+                counts: [samples.len() as u32, triangles as u32, capacity, u32::from(params.traversal == Traversal::Tiles)],
                 tiles: [tiles.0, tiles.1, groups.0, groups.1],
                 dispatch: [row, 0, 0, 0],
             },
@@ -247,6 +300,30 @@ impl Method for TriangleMasks {
         let triangle_buffer = ctx.buffer("triangle_masks::triangles", triangle_bytes.max(64), storage);
         if !corners.is_empty() {
             ctx.queue.write_buffer(&triangle_buffer, 0, bytemuck::cast_slice(&corners));
+        }
+        let node_records: Vec<BvhNodeUniform> = hierarchy
+            .as_ref()
+            .map(|h| {
+                h.nodes()
+                    .map(|(lo, hi, start, count)| BvhNodeUniform { lo: lo.as_vec3().into(), start, hi: hi.as_vec3().into(), count })
+                    .collect()
+            })
+            .unwrap_or_default();
+        if let Some(h) = &hierarchy {
+            // Occluders bounds the depth at 24 + log2(triangles / 4) + 2: past
+            // the stack only beyond 2^24 triangles (800 MB of records).
+            if h.depth() >= STACK {
+                return Err(crate::error::Error::InvalidScene(format!(
+                    "triangle_masks: the triangle hierarchy is {} levels deep, past the walk's {STACK}",
+                    h.depth()
+                )));
+            }
+        }
+        let node_bytes = std::mem::size_of_val(node_records.as_slice()) as u64;
+        ctx.check_buffer(Self::NAME, &format!("the hierarchy of the scene's {triangles} triangles"), node_bytes, "the triangle count (decimate the meshes)")?;
+        let node_buffer = ctx.buffer("triangle_masks::nodes", node_bytes.max(32), storage);
+        if !node_records.is_empty() {
+            ctx.queue.write_buffer(&node_buffer, 0, bytemuck::cast_slice(&node_records));
         }
         let bounds = ctx.buffer("triangle_masks::bounds", 32 * (tile_count + groups.0 as u64 * groups.1 as u64), storage);
         let bins = ctx.buffer("triangle_masks::bins", 12 * tile_count, storage);
@@ -268,11 +345,12 @@ impl Method for TriangleMasks {
                     Binding::Buffer(list),
                     Binding::Buffer(&counters),
                     Binding::Texture(&visibility),
+                    Binding::Buffer(&node_buffer),
                 ],
             )
         };
         let triangle_grid = (row, (triangles as u32).div_ceil(row).max(1));
-        let list = if params.binning {
+        let list = if params.traversal == Traversal::Tiles {
             let placeholder = frame.ctx.buffer("triangle_masks::no_list", 4, wgpu::BufferUsages::STORAGE);
             let counting = bind(&frame.ctx, &placeholder);
             frame.pass("tile_bounds", |ctx, encoder, ts| {
@@ -297,14 +375,23 @@ impl Method for TriangleMasks {
             frame.ctx.buffer("triangle_masks::no_list", 4, wgpu::BufferUsages::STORAGE)
         };
         let shading = bind(&frame.ctx, &list);
-        frame.pass("masks", |ctx, encoder, ts| pass.dispatch(ctx, encoder, "masks", &shading, ts.map(|t| t.compute())))?;
+        let entry = if params.traversal == Traversal::Bvh { "masks_bvh" } else { "masks" };
+        frame.pass("masks", |ctx, encoder, ts| pass.dispatch(ctx, encoder, entry, &shading, ts.map(|t| t.compute())))?;
         let counts: Vec<u32> = bytemuck::pod_collect_to_vec(&frame.read_now(&counters, 4 * COUNTERS as u32)?);
         let count = |i: usize| counts.get(i).copied().unwrap_or(0) as i64;
         let wide = |i: usize| count(i) | (count(i + 1) << 32);
         frame.stat("light_samples", samples.len() as i64);
         frame.stat("triangles", triangles as i64);
         frame.stat("tiles", tile_count as i64);
-        frame.stat("triangles_binned", if params.binning { count(0) } else { triangles as i64 * tile_count as i64 });
+        frame.stat(
+            "triangles_binned",
+            match params.traversal {
+                Traversal::Tiles => count(0),
+                Traversal::All => triangles as i64 * tile_count as i64,
+                Traversal::Bvh => 0,
+            },
+        );
+        frame.stat("nodes_entered", wide(10));
         frame.stat("tiles_overflowed", count(1));
         frame.stat("tiles_unshadowed", count(7));
         frame.stat("triangle_pixel_pairs", wide(2));
