@@ -577,6 +577,8 @@ var<workgroup> wg_pairs: atomic<u32>;
 var<workgroup> wg_per_sample: atomic<u32>;
 var<workgroup> wg_early: atomic<u32>;
 var<workgroup> wg_past_cone: atomic<u32>;
+// Nodes of the hierarchy entered (`masks_bvh`; none in `masks`).
+var<workgroup> wg_entered: atomic<u32>;
 // The tile's list: first entry, length, whether listed (1) or every triangle (0).
 var<workgroup> wg_list: vec3<u32>;
 // Pixels of the workgroup whose chunk's mask is not yet full.
@@ -691,26 +693,38 @@ fn masks(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation
         }
     }
     if (receiver) {
-        // No sample faces the pixel (only possible with very few samples): the
-        // light is treated as hidden rather than dividing by zero (raytraced's rule).
-        let v = select(0.0, clamp(sums.x / sums.y, 0.0, 1.0), sums.y > 0.0);
-        textureStore(visibility_out, pixel.px, vec4<f32>(v, 0.0, 0.0, 0.0));
-        atomicAdd(&wg_pairs, work.pairs);
-        atomicAdd(&wg_per_sample, work.per_sample);
-        atomicAdd(&wg_past_cone, work.past_cone);
-        if (work.ended_early && list.y > 0u) {
-            atomicAdd(&wg_early, 1u);
-        }
+        store_pixel(pixel, sums, work, list.y > 0u);
     } else if (pixel.inside) {
         textureStore(visibility_out, pixel.px, vec4<f32>(0.0, 0.0, 0.0, 0.0));
     }
     workgroupBarrier();
     if (li == 0u) {
-        add_wide(2u, atomicLoad(&wg_pairs));
-        add_wide(4u, atomicLoad(&wg_per_sample));
-        atomicAdd(&counters[6], atomicLoad(&wg_early));
-        add_wide(8u, atomicLoad(&wg_past_cone));
+        add_counters();
     }
+}
+
+// A receiver's visibility from its sums, and its work into the workgroup's
+// counters (`ended_early` counts only where some triangle was there to test).
+fn store_pixel(pixel: ScreenPixel, sums: vec2<f32>, work: PixelWork, any_triangle: bool) {
+    // No sample faces the pixel (only possible with very few samples): the
+    // light is treated as hidden rather than dividing by zero (raytraced's rule).
+    let v = select(0.0, clamp(sums.x / sums.y, 0.0, 1.0), sums.y > 0.0);
+    textureStore(visibility_out, pixel.px, vec4<f32>(v, 0.0, 0.0, 0.0));
+    atomicAdd(&wg_pairs, work.pairs);
+    atomicAdd(&wg_per_sample, work.per_sample);
+    atomicAdd(&wg_past_cone, work.past_cone);
+    if (work.ended_early && any_triangle) {
+        atomicAdd(&wg_early, 1u);
+    }
+}
+
+// The workgroup's counters into the totals (one invocation, after a barrier).
+fn add_counters() {
+    add_wide(2u, atomicLoad(&wg_pairs));
+    add_wide(4u, atomicLoad(&wg_per_sample));
+    atomicAdd(&counters[6], atomicLoad(&wg_early));
+    add_wide(8u, atomicLoad(&wg_past_cone));
+    add_wide(10u, atomicLoad(&wg_entered));
 }
 
 // The walk of the hierarchy (`masks_bvh`), one word of samples at a time:
@@ -845,8 +859,6 @@ fn walk(cone: Cone, first_word: u32, words: u32, w: u32, work: ptr<function, Pix
     return entered;
 }
 
-var<workgroup> wg_entered: atomic<u32>;
-
 // One invocation per pixel: per chunk of samples, the mask, a walk per word, the sums.
 @compute @workgroup_size(8, 8)
 fn masks_bvh(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
@@ -870,25 +882,13 @@ fn masks_bvh(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invoca
             work.ended_early = work.ended_early && open_words == 0u;
             sums += end_chunk(pixel, first_word, words);
         }
-        // No sample faces the pixel: hidden, as in `masks`.
-        let v = select(0.0, clamp(sums.x / sums.y, 0.0, 1.0), sums.y > 0.0);
-        textureStore(visibility_out, pixel.px, vec4<f32>(v, 0.0, 0.0, 0.0));
-        atomicAdd(&wg_pairs, work.pairs);
-        atomicAdd(&wg_per_sample, work.per_sample);
-        atomicAdd(&wg_past_cone, work.past_cone);
+        store_pixel(pixel, sums, work, settings.counts.y > 0u);
         atomicAdd(&wg_entered, entered);
-        if (work.ended_early && settings.counts.y > 0u) {
-            atomicAdd(&wg_early, 1u);
-        }
     } else if (pixel.inside) {
         textureStore(visibility_out, pixel.px, vec4<f32>(0.0, 0.0, 0.0, 0.0));
     }
     workgroupBarrier();
     if (li == 0u) {
-        add_wide(2u, atomicLoad(&wg_pairs));
-        add_wide(4u, atomicLoad(&wg_per_sample));
-        atomicAdd(&counters[6], atomicLoad(&wg_early));
-        add_wide(8u, atomicLoad(&wg_past_cone));
-        add_wide(10u, atomicLoad(&wg_entered));
+        add_counters();
     }
 }
