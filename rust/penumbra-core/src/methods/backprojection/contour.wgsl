@@ -642,13 +642,26 @@ fn tile_status(r: BpReceiver, li: LevelInfo, tiles: LevelInfo, ab: vec2<i32>) ->
     let n = vec2<i32>(li.size);
     let first = ab * 4;
     let last = first + 3;
+    var b: vec2<f32>;
+    var wrapped = false;
     if (any(first < vec2<i32>(0)) || any(last >= n)) {
         let beyond = any(last < vec2<i32>(0)) || any(first >= n);
-        if (is_cube(shadow.light_space) || !beyond) {
+        if (!beyond) {
             return Tile(MIXED, 0.0);
         }
+        if (is_cube(shadow.light_space)) {
+            let w = beyond_face_bounds(r, li, ab);
+            if (w.x == 0.0) {
+                return Tile(MIXED, 0.0);
+            }
+            b = w.yz;
+            wrapped = true;
+        } else {
+            b = map_bounds(r.layer, tiles, ab, false);
+        }
+    } else {
+        b = map_bounds(r.layer, tiles, ab, false);
     }
-    let b = map_bounds(r.layer, tiles, ab, false);
     if (b.x >= r.depth - r.bias) {
         return Tile(FREE, b.x);
     }
@@ -668,10 +681,83 @@ fn tile_status(r: BpReceiver, li: LevelInfo, tiles: LevelInfo, ab: vec2<i32>) ->
     if (!below_threshold(r, b.x, inv_lo)) {
         return Tile(FREE, b.x);
     }
-    if (below_threshold(r, b.y, inv_hi)) {
+    // (Beyond a face, `occludes`' test along the axis towards the light
+    // may drop samples that pass the threshold: never OCCLUDED there.)
+    if (below_threshold(r, b.y, inv_hi) && !wrapped) {
         return Tile(OCCLUDED, b.x);
     }
     return Tile(MIXED, b.x);
+}
+
+// Bounds (y: minimum, z: maximum depth along the receiver layer's axis) of
+// what `read_sample` reads for the 4 x 4 samples of level `li` from sample
+// 4 ab, a tile wholly beyond the receiver's cube face; x: 1 where they hold,
+// 0 where they cannot be had (the samples map to several faces or to an
+// inactive one, or no level of the hierarchy holds them in 2 x 2 texels).
+// Each sample reads the neighbour face's texel holding its centre's
+// direction (`map_bounds`). The corner samples' directions map into one
+// face: the rectangle's directions form a convex cone, and so does a face's,
+// so every sample's does, and the central projection between the two
+// planes maps the rectangle to the convex hull of its corners' images. The
+// level-l texels under that hull lie within up to 2 x 2 texels of a level
+// L >= l, whose minimum and maximum bound theirs (each level bounds the
+// map's texels under its own). A depth read on the neighbour face is
+// divided by `layer_depth_scale`, the ray's component along the read face's
+// axis per unit along the receiver's (1 / an affine function of c on the
+// receiver's plane, positive over the cone: its extremes at the corners).
+fn beyond_face_bounds(r: BpReceiver, li: LevelInfo, ab: vec2<i32>) -> vec3<f32> {
+    let ls = shadow.light_space;
+    var layer = -1;
+    var q_lo = vec2<f32>(3e38);
+    var q_hi = vec2<f32>(-3e38);
+    var scale_lo = 3e38;
+    var scale_hi = 0.0;
+    for (var k = 0u; k < 4u; k++) {
+        let corner = vec2<f32>(f32(k & 1u), f32(k >> 1u)) * 3.0;
+        let c = (vec2<f32>(ab * 4) + corner + 0.5) * li.scale;
+        let m = map_wrap(ls, r.layer, c);
+        if ((k > 0u && m.layer != layer) || m.layer == r.layer || !layer_active(ls, m.layer)) {
+            return vec3<f32>(0.0);
+        }
+        layer = m.layer;
+        q_lo = min(q_lo, m.coords);
+        q_hi = max(q_hi, m.coords);
+        let scale = layer_depth_scale(ls, r.layer, c, m.layer);
+        if (!(scale > 0.0)) {
+            return vec3<f32>(0.0);
+        }
+        scale_lo = min(scale_lo, scale);
+        scale_hi = max(scale_hi, scale);
+    }
+    // The texels of level l the samples read (clamped to the map, as the
+    // reads are), the hull widened by 0.05 level-0 texels and the depth
+    // scales by 1e-5 of theirs, far beyond float32 rounding of an inner
+    // sample's image and scale (about 1e-4 texels on a 1024-texel face).
+    q_lo -= vec2<f32>(0.05);
+    q_hi += vec2<f32>(0.05);
+    scale_lo *= 1.0 - 1e-5;
+    scale_hi *= 1.0 + 1e-5;
+    let size = li.size;
+    let t_lo = clamp(vec2<i32>(floor(q_lo / li.scale)), vec2<i32>(0), vec2<i32>(size - 1));
+    let t_hi = clamp(vec2<i32>(floor(q_hi / li.scale)), vec2<i32>(0), vec2<i32>(size - 1));
+    for (var level = max(li.level, 1u); level < bp.levels; level++) {
+        let shift = level - li.level;
+        let a = t_lo >> vec2<u32>(shift);
+        let z = t_hi >> vec2<u32>(shift);
+        if (any(z - a > vec2<i32>(1))) {
+            continue;
+        }
+        let ri = level_info(level);
+        var b = vec2<f32>(3e38, 0.0);
+        for (var y = a.y; y <= z.y; y++) {
+            for (var x = a.x; x <= z.x; x++) {
+                let h = hierarchy[ri.offset + u32((layer * ri.size + y) * ri.size + x)];
+                b = vec2<f32>(min(b.x, h.x), max(b.y, h.y));
+            }
+        }
+        return vec3<f32>(1.0, b.x / scale_hi, b.y / scale_lo);
+    }
+    return vec3<f32>(0.0);
 }
 
 struct Visibility {
