@@ -642,23 +642,19 @@ fn tile_status(r: BpReceiver, li: LevelInfo, tiles: LevelInfo, ab: vec2<i32>) ->
     let n = vec2<i32>(li.size);
     let first = ab * 4;
     let last = first + 3;
+    let outside = any(first < vec2<i32>(0)) || any(last >= n);
+    if (outside && !(any(last < vec2<i32>(0)) || any(first >= n))) {
+        return Tile(MIXED, 0.0);
+    }
+    // Wholly beyond a cube face: bounded through the neighbour face.
+    let wrapped = outside && is_cube(shadow.light_space);
     var b: vec2<f32>;
-    var wrapped = false;
-    if (any(first < vec2<i32>(0)) || any(last >= n)) {
-        let beyond = any(last < vec2<i32>(0)) || any(first >= n);
-        if (!beyond) {
+    if (wrapped) {
+        let w = beyond_face_bounds(r, li, ab);
+        if (w.x == 0.0) {
             return Tile(MIXED, 0.0);
         }
-        if (is_cube(shadow.light_space)) {
-            let w = beyond_face_bounds(r, li, ab);
-            if (w.x == 0.0) {
-                return Tile(MIXED, 0.0);
-            }
-            b = w.yz;
-            wrapped = true;
-        } else {
-            b = map_bounds(r.layer, tiles, ab, false);
-        }
+        b = w.yz;
     } else {
         b = map_bounds(r.layer, tiles, ab, false);
     }

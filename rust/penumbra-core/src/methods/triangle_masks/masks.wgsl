@@ -840,8 +840,8 @@ fn walk(cone: Cone, first_word: u32, words: u32, w: u32, work: ptr<function, Pix
         let right = node_items(cone, node.start, items);
         let left = node_items(cone, entry.x + 1u, items);
         // The child whose box's centre is nearer o is walked first: of the
-        // orders tried (left first, nearer first, farther first) it entered
-        // the fewest nodes on generated scenes (10-20% fewer than left first).
+        // orders tried while building this (left first, nearer first,
+        // farther first) it entered the fewest nodes on generated scenes.
         let dl = nodes[entry.x + 1u].lo + nodes[entry.x + 1u].hi - 2.0 * cone.o;
         let dr = nodes[node.start].lo + nodes[node.start].hi - 2.0 * cone.o;
         let left_first = dot(dl, dl) <= dot(dr, dr);
