@@ -218,12 +218,31 @@ def test_pvmf_parameters_are_checked(renderer: penumbra.Renderer) -> None:
         ({"falloff": True}, "unknown parameter"),
         ({"estimate": "exact"}, "estimate"),
         ({"estimate": "area", "kernel": "square"}, "kernel='square' does not apply"),
+        ({"occluder_distance": "mean"}, "occluder_distance"),
+        ({"occluder_distance": "darker", "estimate": "area"}, "occluder_distance='darker'"),
     ]:
         with pytest.raises(penumbra.ParameterError, match=match):
             renderer.render(scene, "pvmf", **bad)
     params = renderer.render(scene, "pvmf").params
     assert params["bias"] == "slope" and params["n_pcf"] == 7 and params["n_blur"] == 0
     assert (params["kernel"], params["offsets"], params["umbra"], params["s_e"]) == ("disk", "radius", "skip", 0.02)
+    assert params["occluder_distance"] == "nearest_volume"
+
+
+def test_one_caster_gives_the_same_image_whatever_the_occluder_distance(renderer: penumbra.Renderer) -> None:
+    """occluder_distance: where every volume covering a texel comes from
+    edges at one distance (a sphere's silhouette, seen from its light), the
+    farthest enclosing edge is the nearest volume's, so the options change
+    nothing; the second mask pass runs only for them."""
+    scene = penumbra.scenes.get("sphere_on_plane", width=64, height=64)
+    base = renderer.render(scene, "pvmf")
+    assert "mask_farthest" not in base.timings
+    for choice in ("farthest_edge", "darker"):
+        other = renderer.render(scene, "pvmf", occluder_distance=choice)
+        # Both options share one mask: the second reuses the first's.
+        assert "mask_farthest" in other.timings or "mask" in other.reused_passes
+        off = np.abs(other.visibility - base.visibility) > 0.05
+        assert off.mean() < 0.01, f"{choice}: {off.mean():.2%} of pixels moved by more than 0.05"
 
 
 @pytest.mark.parametrize("thickness", [1e-4, 1e-3])

@@ -15,6 +15,10 @@ pub struct VolumePass {
     name: &'static str,
     pipeline: wgpu::RenderPipeline,
     layout: Layout,
+    /// Whether the pass keeps the nearest volume in a depth map
+    /// ([`Self::new`]) or keeps, without depth, the largest value each
+    /// colour target receives ([`Self::new_max`]).
+    depth: bool,
 }
 
 impl VolumePass {
@@ -42,7 +46,37 @@ impl VolumePass {
         // Both sides of every quadrilateral: the volume nearest the light, whichever way it faces.
         let primitive = wgpu::PrimitiveState { cull_mode: None, ..Default::default() };
         let pipeline = layout::render_pipeline(device, name, &layout, &module, (vs, fs), &buffers, primitive, layout::nearest_depth(formats::DEPTH), &targets);
-        Self { name, pipeline, layout }
+        Self { name, pipeline, layout, depth: true }
+    }
+
+    /// As [`Self::new`], but without a depth map: every volume's fragments
+    /// reach the colour targets, which keep the largest value each texel
+    /// receives (blend `Max`; the targets' formats must be blendable, and
+    /// they are cleared to zero). [`Self::record_max`] records it.
+    pub fn new_max<V>(
+        device: &wgpu::Device,
+        pool: &ResourcePool,
+        name: &'static str,
+        source: String,
+        (vs, fs): (&str, &str),
+        attributes: &[wgpu::VertexAttribute],
+        targets: &[wgpu::TextureFormat],
+    ) -> Self {
+        let layout = pool.layout(device, name, &[layout::uniform(0)]);
+        let module = crate::shaders::module(device, name, source);
+        let buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<V>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes,
+        })];
+        let max = wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Max };
+        let targets: Vec<_> = targets
+            .iter()
+            .map(|&format| Some(wgpu::ColorTargetState { format, blend: Some(wgpu::BlendState { color: max, alpha: max }), write_mask: wgpu::ColorWrites::ALL }))
+            .collect();
+        let primitive = wgpu::PrimitiveState { cull_mode: None, ..Default::default() };
+        let pipeline = layout::render_pipeline(device, name, &layout, &module, (vs, fs), &buffers, primitive, None, &targets);
+        Self { name, pipeline, layout, depth: false }
     }
 
     /// Records the pass into a new `map_size` depth map with a layer per
@@ -60,6 +94,46 @@ impl VolumePass {
         targets: &[&PooledTexture],
         timestamps: Option<PassTimestamps<'_>>,
     ) -> Result<PooledTexture> {
+        let vertices = self.upload(ctx, vertices)?;
+        Ok(self.record_uploaded(ctx, encoder, projection, &vertices, map_size, targets, timestamps))
+    }
+
+    /// As [`Self::record`], for vertices already on the GPU ([`Self::upload`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_uploaded(
+        &self,
+        ctx: &FrameContext<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        projection: &LightProjection,
+        vertices: &VolumeVertices,
+        map_size: u32,
+        targets: &[&PooledTexture],
+        timestamps: Option<PassTimestamps<'_>>,
+    ) -> PooledTexture {
+        let depth = self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| vertices.draw(pass));
+        depth.expect("a depth pass (VolumePass::new) returns its depth map")
+    }
+
+    /// Records a [`Self::new_max`] pass of `vertices` into the colour
+    /// `targets` (no depth map); `vertices` may be those another pass
+    /// uploaded ([`Self::upload`]) with the same vertex layout.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_max(
+        &self,
+        ctx: &FrameContext<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        projection: &LightProjection,
+        vertices: &VolumeVertices,
+        map_size: u32,
+        targets: &[&PooledTexture],
+        timestamps: Option<PassTimestamps<'_>>,
+    ) {
+        debug_assert!(!self.depth, "record_max records a VolumePass::new_max pass");
+        self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| vertices.draw(pass));
+    }
+
+    /// The vertex buffer of `vertices`, for [`Self::record_uploaded`] and [`Self::record_max`].
+    pub fn upload<V: bytemuck::Pod>(&self, ctx: &FrameContext<'_>, vertices: &[V]) -> Result<VolumeVertices> {
         let count = u32::try_from(vertices.len()).map_err(|_| {
             Error::InvalidScene(format!("too many penumbra volumes for one draw: {} vertices, at most {}", vertices.len(), u32::MAX))
         })?;
@@ -69,12 +143,7 @@ impl VolumePass {
             ctx.queue.write_buffer(&buffer, 0, bytes);
             buffer
         });
-        Ok(self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| {
-            if let Some(buffer) = &buffer {
-                pass.set_vertex_buffer(0, buffer.slice(..));
-                pass.draw(0..count, 0..1);
-            }
-        }))
+        Ok(VolumeVertices { buffer, count })
     }
 
     /// As [`Self::record`], for a pipeline whose vertices are the light
@@ -93,7 +162,7 @@ impl VolumePass {
     ) -> PooledTexture {
         let (positions, indices, _) = ctx.light_geometry();
         let ranges = ctx.light_geometry_meshes();
-        self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| {
+        let depth = self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| {
             pass.set_vertex_buffer(0, positions.slice(..));
             pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
             for (range, id) in ranges.iter().zip(ids) {
@@ -102,7 +171,8 @@ impl VolumePass {
                     pass.draw_indexed(range.clone(), 0, id..end);
                 }
             }
-        })
+        });
+        depth.expect("a depth pass (VolumePass::new) returns its depth map")
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -115,8 +185,8 @@ impl VolumePass {
         targets: &[&PooledTexture],
         timestamps: Option<PassTimestamps<'_>>,
         draw: impl Fn(&mut wgpu::RenderPass<'_>),
-    ) -> PooledTexture {
-        let depth = ShadowMapPass::create_map(ctx, map_size, projection.layers());
+    ) -> Option<PooledTexture> {
+        let depth = self.depth.then(|| ShadowMapPass::create_map(ctx, map_size, projection.layers()));
         let faces: Vec<(u32, &LightFrustum)> = projection.active_layers().collect();
         for (k, (layer, frustum)) in faces.iter().enumerate() {
             let layer = *layer as usize;
@@ -132,7 +202,7 @@ impl VolumePass {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(self.name),
                 color_attachments: &attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                depth_stencil_attachment: depth.as_ref().map(|depth| wgpu::RenderPassDepthStencilAttachment {
                     view: &depth.layer_views[layer],
                     depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                     stencil_ops: None,
@@ -147,5 +217,20 @@ impl VolumePass {
             draw(&mut pass);
         }
         depth
+    }
+}
+
+/// Volume vertices on the GPU ([`VolumePass::upload`]); none for an empty list.
+pub struct VolumeVertices {
+    buffer: Option<crate::gpu::pool::PooledBuffer>,
+    count: u32,
+}
+
+impl VolumeVertices {
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        if let Some(buffer) = &self.buffer {
+            pass.set_vertex_buffer(0, buffer.slice(..));
+            pass.draw(0..self.count, 0..1);
+        }
     }
 }

@@ -22,7 +22,7 @@ struct PvmfSettings {
     // bit 0: disk kernel (else the paper's square); bit 1: skip pixels that
     // fail the shadow-map test outside every volume (else filter them, 5.2);
     // bit 2: repair "horizon"; bit 3: estimate "area"; bit 4: blocker_test
-    // "behind".
+    // "behind"; bit 5: occluder_distance "farthest_edge"; bit 6: "darker".
     flags: u32,
     // The blur takes only pixels whose w_pcf is at least this many texels.
     blur_min_width: f32,
@@ -37,8 +37,11 @@ var<private> settings: PvmfSettings;
 // masked, filtered, blurred pixels.
 @group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>, 3>;
 // The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
-@group(0) @binding(12) var object_map: texture_2d_array<u32>;
-@group(0) @binding(13) var<storage, read> mesh_objects: array<u32>;
+// The largest d_e over far per mask texel (occluder_distance
+// "farthest_edge"; methods/pvmf/mask.wgsl's fs_mask_far), else unread.
+@group(0) @binding(12) var farthest_distance: texture_2d_array<f32>;
+@group(0) @binding(13) var object_map: texture_2d_array<u32>;
+@group(0) @binding(14) var<storage, read> mesh_objects: array<u32>;
 
 // d_o (5.2): the mean of the d_e channel over a 5 x 5 texel region (3 x 3
 // taps, 2 texels apart) around the receiver's projection, over texels that
@@ -46,10 +49,23 @@ var<private> settings: PvmfSettings;
 // no volume is near (an umbra pixel outside every volume), the occluder's
 // distance is read from the shadow map instead: the stored depth along the
 // receiver's light ray.
-fn occluder_distance(r: Receiver) -> f32 {
+// occluder_distance = "farthest_edge" (beyond 5.2, issue 28): 5.2 defines
+// d_o over the edges whose volumes enclose the receiver, but the mask's d_e
+// is the volume nearest the light's. Where a second caster lies near the
+// light (generated scene 37: a boot 0.3 under a light of radius 0.32, over
+// a koala), its volumes cover the nearer caster's whole shadow, d_o is the
+// boot's, and w_pcf, sized for the boot's penumbra, spreads the koala's
+// umbra over the floor (6% of its pixels lit). A tap then takes the edge
+// farthest from the light whose volume covers the texel, when that edge is
+// nearer the light than the receiver (d_r): a volume starts at its edge, so
+// it can hold the receiver only then. Otherwise the tap keeps d_e.
+// Returns (d_o from the nearest volumes, d_o from the farthest edges); the
+// second is the first without "farthest_edge" or "darker".
+fn occluder_distance(r: Receiver, d_r: f32) -> vec2<f32> {
+    let farthest_edge = (settings.flags & 96u) != 0u;
     let ls = pvmf.light_space;
     let centre = vec2<i32>(floor(r.coords));
-    var sum = 0.0;
+    var sum = vec2<f32>(0.0);
     var count = 0.0;
     for (var j = -1; j <= 1; j++) {
         for (var i = -1; i <= 1; i++) {
@@ -58,9 +74,19 @@ fn occluder_distance(r: Receiver) -> f32 {
             let m = map_wrap(ls, r.layer, vec2<f32>(centre + 2 * vec2<i32>(i, j)) + 0.5);
             if (layer_active(ls, m.layer)) {
                 let dims = textureDimensions(edge_distance);
-                let d = textureLoad(edge_distance, map_texel(dims, map_point_in(ls, m, dims)), m.layer, 0).x;
+                let texel = map_texel(dims, map_point_in(ls, m, dims));
+                let d = textureLoad(edge_distance, texel, m.layer, 0).x;
+                var d_far = d;
+                if (farthest_edge) {
+                    // The mask and this channel have the same size (mod.rs).
+                    let far_e = textureLoad(farthest_distance, texel, m.layer, 0).x * ls.depth.y;
+                    if (far_e > 0.0 && far_e < d_r) {
+                        d_far = far_e;
+                    }
+                }
+                // far_e > 0 only where some volume, hence d_e > 0.
                 if (d > 0.0) {
-                    sum += d;
+                    sum += vec2<f32>(d, d_far);
                     count += 1.0;
                 }
             }
@@ -71,7 +97,28 @@ fn occluder_distance(r: Receiver) -> f32 {
     }
     let depth = map_point_depth(ls, shadow_map, MapPoint(r.layer, vec2<f32>(centre) + 0.5));
     // light_ray has unit depth along the layer's axis, so depth * |ray| is the distance.
-    return depth * length(light_ray(ls, r.layer, r.coords));
+    return vec2<f32>(depth * length(light_ray(ls, r.layer, r.coords)));
+}
+
+// 5.2's jittered n_pcf x n_pcf percentage-closer filter of width w texels
+// per axis about the receiver: the fraction of taps that pass.
+fn pcf_estimate(r: Receiver, p: vec3<f32>, px: vec2<u32>, w: vec2<f32>) -> f32 {
+    let n_pcf = settings.n_pcf;
+    var sum = 0.0;
+    for (var i = 0u; i < n_pcf * n_pcf; i++) {
+        // An n_pcf x n_pcf grid of cells w_pcf / n_pcf square, one
+        // jittered tap per cell (5.2, Fig. 5.3).
+        var s = grid_tap(i, n_pcf, jitter2(px, settings.seed, i));
+        if ((settings.flags & 1u) != 0u) {
+            // The light's projection is a disk: the disk inscribed
+            // in the square, with the same strata.
+            s = 0.5 * square_to_disk(s);
+        }
+        // blocker_test "behind" (beyond 5.2): a failing tap counts only
+        // where the receiver lies behind its texel's surface.
+        sum += pcf_tap_behind(pvmf, shadow_map, shadow_sampler, r, r.coords + s * w, p, (settings.flags & 16u) != 0u);
+    }
+    return sum / f32(n_pcf * n_pcf);
 }
 
 // w_pcf (5.2) in map texels per axis:
@@ -168,34 +215,33 @@ fn shade(pixel: ScreenPixel) {
             if (in_volume || (!lit && filter_umbra)) {
                 atomicAdd(&counters[1], 1u);
                 let r = pcf_receiver(pvmf, p, n);
-                let d_o = occluder_distance(r);
+                let d_r = length(p - pvmf.center.xyz);
+                let distances = occluder_distance(r, d_r);
+                // occluder_distance "farthest_edge" filters with the farthest
+                // edges' d_o alone; the others start from the nearest volumes'.
+                let d_o = select(distances.x, distances.y, (settings.flags & 32u) != 0u);
                 let w = filter_width(r, p, d_o);
                 width = w.x;
                 let n_pcf = settings.n_pcf;
                 let area = (settings.flags & 8u) != 0u;
-                let d_r = length(p - pvmf.center.xyz);
                 let spread_o = max(d_r - d_o, 0.0) / max(d_o, 1e-30);
                 let w_o = unclamped_width(r, p, spread_o);
                 // A kernel narrower than a texel is the receiver's own test:
                 // there the taps' cones shrink to nothing, and 5.2's filter serves.
+                // occluder_distance "darker" (beyond 5.2, issue 28): where the
+                // farthest enclosing edges lie beyond the nearest volumes' (a
+                // second caster nearer the light, or a caster's far rim), one
+                // filter per d_o, and the lower lit fraction. The wide filter
+                // spreads a nearer-the-receiver caster's umbra over lit floor;
+                // the narrow one misses a near-the-light caster's wide
+                // penumbra; each sees an umbra the other loses.
+                let darker = (settings.flags & 64u) != 0u && distances.y > distances.x;
                 if (area && min(w.x, w.y) >= 1.0) {
                     v = 1.0 - min(area_estimate(r, p, vec2<u32>(pixel.px), d_r, spread_o, w, w_o), 1.0);
+                } else if (darker) {
+                    v = min(pcf_estimate(r, p, vec2<u32>(pixel.px), w), pcf_estimate(r, p, vec2<u32>(pixel.px), filter_width(r, p, distances.y)));
                 } else {
-                    var sum = 0.0;
-                    for (var i = 0u; i < n_pcf * n_pcf; i++) {
-                        // An n_pcf x n_pcf grid of cells w_pcf / n_pcf square, one
-                        // jittered tap per cell (5.2, Fig. 5.3).
-                        var s = grid_tap(i, n_pcf, jitter2(vec2<u32>(pixel.px), settings.seed, i));
-                        if ((settings.flags & 1u) != 0u) {
-                            // The light's projection is a disk: the disk inscribed
-                            // in the square, with the same strata.
-                            s = 0.5 * square_to_disk(s);
-                        }
-                        // blocker_test "behind" (beyond 5.2): a failing tap counts only
-                        // where the receiver lies behind its texel's surface.
-                        sum += pcf_tap_behind(pvmf, shadow_map, shadow_sampler, r, r.coords + s * w, p, (settings.flags & 16u) != 0u);
-                    }
-                    v = sum / f32(n_pcf * n_pcf);
+                    v = pcf_estimate(r, p, vec2<u32>(pixel.px), w);
                 }
                 // 5.3 blurs every filtered pixel; a filter narrower than
                 // blur_min_width texels left no jitter noise to hide.

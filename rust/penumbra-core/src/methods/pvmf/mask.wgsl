@@ -39,3 +39,14 @@ fn fs_mask(in: MaskVertexOut) -> MaskOut {
     out.d_e = select(in.d_e, in.d_local, in.d_local > 0.0);
     return out;
 }
+
+// occluder_distance = "farthest_edge" (beyond 5.2): the same volumes drawn
+// again without the depth test into a channel that keeps, per texel, the
+// largest d_e (blend max), over the light's far distance so that a 16-bit
+// float holds it at 2^-11 relative precision. 0 (the clear value) marks
+// texels without a volume.
+@fragment
+fn fs_mask_far(in: MaskVertexOut) -> @location(0) f32 {
+    // far > 0 by construction of the frustum; d_e > 0 (no edge touches the light).
+    return select(in.d_e, in.d_local, in.d_local > 0.0) / shadow.depth.y;
+}

@@ -45,6 +45,10 @@ pub use geometry::{mask_volumes, MaskStats, MaskVertex, Offsets};
 
 /// The d_e channel of the mask.
 pub const DISTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+/// The farthest d_e channel (`occluder_distance = "farthest_edge"`): d_e
+/// over the far distance, blended with `Max`, which 32-bit floats need a
+/// feature for and 16-bit floats do not.
+pub const FARTHEST_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
 
 /// The penumbra volume mask (pass 2) and the visibility estimate (pass 3),
 /// as the pass cache keeps them.
@@ -57,6 +61,36 @@ pub enum Kernel {
     Square,
     /// The same stratified cells mapped onto the disk inscribed in that square.
     Disk,
+}
+
+/// Where d_o (5.2) comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OccluderDistance {
+    /// The mask's d_e channel: the volume nearest the light (5.1, 5.2).
+    NearestVolume,
+    /// The edge farthest from the light whose volume covers the receiver's
+    /// texel and which lies nearer the light than the receiver.
+    FarthestEdge,
+    /// Both, where they differ: a filter for each d_o, the lower lit
+    /// fraction kept.
+    Darker,
+}
+
+impl OccluderDistance {
+    pub const NAMES: [&'static str; 3] = ["nearest_volume", "farthest_edge", "darker"];
+
+    fn parse(name: &str) -> Self {
+        match name {
+            "farthest_edge" => Self::FarthestEdge,
+            "darker" => Self::Darker,
+            _ => Self::NearestVolume,
+        }
+    }
+
+    /// Whether the mask pass also keeps the farthest edge per texel.
+    pub fn farthest(self) -> bool {
+        self != Self::NearestVolume
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -100,6 +134,8 @@ pub struct PvmfParams {
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`: `hidden`, `horizon` and `distance` apply).
     pub repairs: Repairs,
+    /// Where d_o (5.2) comes from (`occluder_distance`).
+    pub occluder_distance: OccluderDistance,
 }
 
 /// The values of `repairs`: cumulative, in the order docs/real_meshes.md
@@ -131,6 +167,9 @@ pub const COUNTERS: [&str; 3] = ["masked_pixels", "filtered_pixels", "blurred_pi
 pub struct PvmfMask {
     pub mask_depth: PooledTexture,
     pub edge_distance: PooledTexture,
+    /// The largest d_e over the far distance per texel (`farthest_edge`), or
+    /// `None`.
+    pub farthest_distance: Option<PooledTexture>,
     pub stats: MaskStats,
     /// Meshes whose silhouettes came from the silhouette cache.
     pub silhouette_cache_hits: usize,
@@ -162,7 +201,7 @@ pub fn mask_key(params: &PvmfParams, projection: &LightProjection, (l, r): (DVec
         .f64s(&[r, params.s_e])
         .bytes(offsets.as_bytes())
         .bytes(params.open_edges.name().as_bytes())
-        .bytes(&[u8::from(params.repairs.hidden), u8::from(params.repairs.distance)])
+        .bytes(&[u8::from(params.repairs.hidden), u8::from(params.repairs.distance), u8::from(params.occluder_distance.farthest())])
         .projection(projection)
         .u32(params.shadow.map_size)
         .u32(mask_size);
@@ -175,7 +214,9 @@ fn estimate_uniforms(params: &PvmfParams, projection: &LightProjection, light: (
         | (u32::from(!params.filter_umbra) << 1)
         | (u32::from(params.repairs.horizon) << 2)
         | (u32::from(params.area_estimate) << 3)
-        | (u32::from(params.behind) << 4);
+        | (u32::from(params.behind) << 4)
+        | (u32::from(params.occluder_distance == OccluderDistance::FarthestEdge) << 5)
+        | (u32::from(params.occluder_distance == OccluderDistance::Darker) << 6);
     let settings = SettingsUniform { s_p: params.s_p as f32, n_pcf: params.n_pcf, seed: params.seed as u32, flags, blur_min_width: params.blur_min_width as f32 };
     (test, settings)
 }
@@ -189,6 +230,7 @@ pub fn estimate_key(params: &PvmfParams, projection: &LightProjection, light: ([
 
 pub struct PenumbraVolumeMaskFiltering {
     mask_pass: VolumePass,
+    farthest_pass: VolumePass,
     estimate: ScreenPass,
     blur: ScreenPass,
     object_pass: VolumePass,
@@ -254,6 +296,13 @@ impl MethodParams for PvmfParams {
                 &["map", "auto"],
                 "the penumbra volume mask's resolution: the shadow map's (5.1), or auto: a texel per pixel on the visible receivers (map_size's criterion), at most the map's",
             ),
+            // Departure from 5.2 (issue 28): `occluder_distance` below.
+            ParamSpec::choice(
+                "occluder_distance",
+                "nearest_volume",
+                &OccluderDistance::NAMES,
+                "where d_o (5.2) comes from: the d_e of the volume nearest the light at the receiver's texel (the mask's channel, 5.1); of the edge farthest from the light whose volume covers that texel and which lies nearer the light than the receiver (a caster near the light then no longer widens the filter of a farther caster's shadow); or darker: a filter for each where they differ, the lower lit fraction kept (docs/methods/pvmf.md)",
+            ),
             OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
@@ -265,6 +314,11 @@ impl MethodParams for PvmfParams {
     }
 
     fn parse(p: &ParamSet) -> Result<PvmfParams> {
+        if p.choice("estimate") == "area" && p.choice("occluder_distance") == "darker" {
+            return Err(Error::InvalidParameter(
+                "pvmf: occluder_distance='darker' takes the lower of two 5.2 filters; estimate='area' weighs each tap by its own occluder in one filter instead (use one or the other)".to_owned(),
+            ));
+        }
         if p.choice("estimate") == "area" && p.choice("kernel") == "square" {
             return Err(Error::InvalidParameter(
                 "pvmf: estimate='area' takes its taps on the disk the light projects to; kernel='square' does not apply (use kernel='disk')".to_owned(),
@@ -287,6 +341,7 @@ impl MethodParams for PvmfParams {
             mask_auto: p.choice("mask_size") == "auto",
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
+            occluder_distance: OccluderDistance::parse(p.choice("occluder_distance")),
         })
     }
 }
@@ -310,17 +365,26 @@ impl Method for PenumbraVolumeMaskFiltering {
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32],
             &[DISTANCE_FORMAT],
         );
+        let farthest_pass = VolumePass::new_max::<MaskVertex>(
+            device,
+            pool,
+            "pvmf::farthest_pass",
+            crate::shader!("mask.wgsl"),
+            ("vs_mask", "fs_mask_far"),
+            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32],
+            &[FARTHEST_FORMAT],
+        );
         let storage = layout::visibility_storage;
         // Reads the map, the mask's depth and d_e, the test and settings blocks;
         // writes the raw estimate, the blur mask, the filter width and the counters.
         let bindings = object_map::with_bindings(&[
             layout::depth_array, layout::depth_array, layout::float_array, layout::comparison_sampler, layout::parameters, layout::parameters,
-            storage, storage, storage, layout::storage_buffer_rw,
+            storage, storage, storage, layout::storage_buffer_rw, layout::float_array,
         ]);
         let estimate = ScreenPass::per_pixel(device, pool, "pvmf::estimate_pass", crate::shader!("estimate.wgsl"), &bindings);
         let bindings = [layout::float_texture, layout::float_texture, layout::parameters, storage, layout::storage_buffer_rw];
         let blur = ScreenPass::per_pixel(device, pool, "pvmf::blur_pass", crate::shader!("blur.wgsl"), &bindings);
-        Self { mask_pass, estimate, blur, object_pass: object_map::pass(device, pool) }
+        Self { mask_pass, farthest_pass, estimate, blur, object_pass: object_map::pass(device, pool) }
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmfParams) -> Result<MethodOutput> {
@@ -374,6 +438,8 @@ impl Method for PenumbraVolumeMaskFiltering {
                     Binding::Texture(&estimate.blur_mask),
                     Binding::Texture(&estimate.filter_width),
                     Binding::Buffer(&estimate.counters),
+                    // Without farthest_edge the shader reads no such channel: d_e stands in.
+                    Binding::Texture(mask.farthest_distance.as_ref().unwrap_or(&mask.edge_distance)),
                 ];
                 self.estimate.run(ctx, encoder, &objects.after(&resources), ts);
             })?;
@@ -401,6 +467,9 @@ impl Method for PenumbraVolumeMaskFiltering {
         frame.counters(&counters, &COUNTERS);
         frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth, projection.far()));
         frame.intermediate(Intermediate::color("pvmf_edge_distance", &mask.edge_distance, 1));
+        if let Some(farthest) = &mask.farthest_distance {
+            frame.intermediate(Intermediate::color("pvmf_farthest_distance", farthest, 1));
+        }
         frame.intermediate(Intermediate::color("pvmf_visibility_raw", &estimate.raw, 1));
         frame.intermediate(Intermediate::color("pvmf_blur_mask", &estimate.blur_mask, 1));
         frame.intermediate(Intermediate::color("pvmf_filter_width", &estimate.filter_width, 1));
@@ -415,7 +484,7 @@ impl PenumbraVolumeMaskFiltering {
         // d_e = 0 (the clear value) marks texels without a volume.
         let edge_distance = frame.ctx.light_texture("pvmf::edge_distance", map, projection.layers(), DISTANCE_FORMAT, usage);
         // The CPU work (silhouettes and volumes) is part of the pass's time.
-        let (mask_depth, stats, silhouette_cache_hits) = frame.pass("mask", |ctx, encoder, ts| -> Result<_> {
+        let (mask_depth, stats, silhouette_cache_hits, vertices) = frame.pass("mask", |ctx, encoder, ts| -> Result<_> {
             let (l, r) = (ctx.light.center, ctx.light.radius);
             let (mut stats, mut cache_hits, mut vertices) = (MaskStats::default(), 0, Vec::new());
             // A point light has no penumbra: no volumes, and nothing is filtered.
@@ -430,10 +499,22 @@ impl PenumbraVolumeMaskFiltering {
             // The moved points lie between the light and the edges, nearer than
             // the scene's near plane: clip only what is (almost) at the light.
             let mask_projection = projection.with_near(projection.far() * 1e-4);
-            let depth = self.mask_pass.record(ctx, encoder, &mask_projection, &vertices, map, &[&edge_distance], ts)?;
-            Ok((depth, stats, cache_hits))
+            let vertices = self.mask_pass.upload(ctx, &vertices)?;
+            let depth = self.mask_pass.record_uploaded(ctx, encoder, &mask_projection, &vertices, map, &[&edge_distance], ts);
+            Ok((depth, stats, cache_hits, vertices))
         })??;
-        Ok(PvmfMask { mask_depth, edge_distance, stats, silhouette_cache_hits })
+        // The same volumes again, without the depth test (its own pass, timed apart).
+        let farthest_distance = if params.occluder_distance.farthest() {
+            let farthest = frame.ctx.light_texture("pvmf::farthest_distance", map, projection.layers(), FARTHEST_FORMAT, usage);
+            frame.pass("mask_farthest", |ctx, encoder, ts| {
+                let mask_projection = projection.with_near(projection.far() * 1e-4);
+                self.farthest_pass.record_max(ctx, encoder, &mask_projection, &vertices, map, &[&farthest], ts);
+            })?;
+            Some(farthest)
+        } else {
+            None
+        };
+        Ok(PvmfMask { mask_depth, edge_distance, farthest_distance, stats, silhouette_cache_hits })
     }
 
     /// Passes 4 and 5: the separable, object-aware blur (5.3) of the
