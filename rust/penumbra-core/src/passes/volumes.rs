@@ -31,36 +31,43 @@ impl VolumePass {
         pool: &ResourcePool,
         name: &'static str,
         source: String,
-        (vs, fs): (&str, &str),
+        entry_points: (&str, &str),
         attributes: &[wgpu::VertexAttribute],
         targets: &[wgpu::TextureFormat],
     ) -> Self {
-        let layout = pool.layout(device, name, &[layout::uniform(0)]);
-        let module = crate::shaders::module(device, name, source);
-        let buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<V>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes,
-        })];
         let targets: Vec<_> = targets.iter().map(|&f| Some(f.into())).collect();
-        // Both sides of every quadrilateral: the volume nearest the light, whichever way it faces.
-        let primitive = wgpu::PrimitiveState { cull_mode: None, ..Default::default() };
-        let pipeline = layout::render_pipeline(device, name, &layout, &module, (vs, fs), &buffers, primitive, layout::nearest_depth(formats::DEPTH), &targets);
-        Self { name, pipeline, layout, depth: true }
+        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, true)
     }
 
     /// As [`Self::new`], but without a depth map: every volume's fragments
     /// reach the colour targets, which keep the largest value each texel
     /// receives (blend `Max`; the targets' formats must be blendable, and
-    /// they are cleared to zero). [`Self::record_max`] records it.
+    /// they are cleared to zero). [`Self::record_uploaded`] records it.
     pub fn new_max<V>(
+        device: &wgpu::Device,
+        pool: &ResourcePool,
+        name: &'static str,
+        source: String,
+        entry_points: (&str, &str),
+        attributes: &[wgpu::VertexAttribute],
+        targets: &[wgpu::TextureFormat],
+    ) -> Self {
+        let max = wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Max };
+        let blend = Some(wgpu::BlendState { color: max, alpha: max });
+        let targets: Vec<_> = targets.iter().map(|&format| Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL })).collect();
+        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, false)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn build<V>(
         device: &wgpu::Device,
         pool: &ResourcePool,
         name: &'static str,
         source: String,
         (vs, fs): (&str, &str),
         attributes: &[wgpu::VertexAttribute],
-        targets: &[wgpu::TextureFormat],
+        targets: &[Option<wgpu::ColorTargetState>],
+        depth: bool,
     ) -> Self {
         let layout = pool.layout(device, name, &[layout::uniform(0)]);
         let module = crate::shaders::module(device, name, source);
@@ -69,14 +76,12 @@ impl VolumePass {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes,
         })];
-        let max = wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Max };
-        let targets: Vec<_> = targets
-            .iter()
-            .map(|&format| Some(wgpu::ColorTargetState { format, blend: Some(wgpu::BlendState { color: max, alpha: max }), write_mask: wgpu::ColorWrites::ALL }))
-            .collect();
+        // Both sides of every quadrilateral: the volume nearest the light (or
+        // every volume, without depth), whichever way it faces.
         let primitive = wgpu::PrimitiveState { cull_mode: None, ..Default::default() };
-        let pipeline = layout::render_pipeline(device, name, &layout, &module, (vs, fs), &buffers, primitive, None, &targets);
-        Self { name, pipeline, layout, depth: false }
+        let depth_stencil = if depth { layout::nearest_depth(formats::DEPTH) } else { None };
+        let pipeline = layout::render_pipeline(device, name, &layout, &module, (vs, fs), &buffers, primitive, depth_stencil, targets);
+        Self { name, pipeline, layout, depth }
     }
 
     /// Records the pass into a new `map_size` depth map with a layer per
@@ -95,10 +100,14 @@ impl VolumePass {
         timestamps: Option<PassTimestamps<'_>>,
     ) -> Result<PooledTexture> {
         let vertices = self.upload(ctx, vertices)?;
-        Ok(self.record_uploaded(ctx, encoder, projection, &vertices, map_size, targets, timestamps))
+        let depth = self.record_uploaded(ctx, encoder, projection, &vertices, map_size, targets, timestamps);
+        Ok(depth.expect("a depth pass (VolumePass::new) returns its depth map"))
     }
 
-    /// As [`Self::record`], for vertices already on the GPU ([`Self::upload`]).
+    /// As [`Self::record`], for vertices already on the GPU ([`Self::upload`];
+    /// another pass's, with the same vertex layout, will do): the depth map
+    /// of a [`Self::new`] pass, or `None` for a [`Self::new_max`] pass, which
+    /// draws into its colour `targets` alone.
     #[allow(clippy::too_many_arguments)]
     pub fn record_uploaded(
         &self,
@@ -109,30 +118,11 @@ impl VolumePass {
         map_size: u32,
         targets: &[&PooledTexture],
         timestamps: Option<PassTimestamps<'_>>,
-    ) -> PooledTexture {
-        let depth = self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| vertices.draw(pass));
-        depth.expect("a depth pass (VolumePass::new) returns its depth map")
+    ) -> Option<PooledTexture> {
+        self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| vertices.draw(pass))
     }
 
-    /// Records a [`Self::new_max`] pass of `vertices` into the colour
-    /// `targets` (no depth map); `vertices` may be those another pass
-    /// uploaded ([`Self::upload`]) with the same vertex layout.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_max(
-        &self,
-        ctx: &FrameContext<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        projection: &LightProjection,
-        vertices: &VolumeVertices,
-        map_size: u32,
-        targets: &[&PooledTexture],
-        timestamps: Option<PassTimestamps<'_>>,
-    ) {
-        debug_assert!(!self.depth, "record_max records a VolumePass::new_max pass");
-        self.record_draws(ctx, encoder, projection, map_size, targets, timestamps, |pass| vertices.draw(pass));
-    }
-
-    /// The vertex buffer of `vertices`, for [`Self::record_uploaded`] and [`Self::record_max`].
+    /// The vertex buffer of `vertices`, for [`Self::record_uploaded`].
     pub fn upload<V: bytemuck::Pod>(&self, ctx: &FrameContext<'_>, vertices: &[V]) -> Result<VolumeVertices> {
         let count = u32::try_from(vertices.len()).map_err(|_| {
             Error::InvalidScene(format!("too many penumbra volumes for one draw: {} vertices, at most {}", vertices.len(), u32::MAX))

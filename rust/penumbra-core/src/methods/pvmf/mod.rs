@@ -356,24 +356,12 @@ impl Method for PenumbraVolumeMaskFiltering {
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let mask_pass = VolumePass::new::<MaskVertex>(
-            device,
-            pool,
-            "pvmf::mask_pass",
-            crate::shader!("mask.wgsl"),
-            ("vs_mask", "fs_mask"),
-            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32],
-            &[DISTANCE_FORMAT],
-        );
-        let farthest_pass = VolumePass::new_max::<MaskVertex>(
-            device,
-            pool,
-            "pvmf::farthest_pass",
-            crate::shader!("mask.wgsl"),
-            ("vs_mask", "fs_mask_far"),
-            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32],
-            &[FARTHEST_FORMAT],
-        );
+        let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32];
+        let source = crate::shader!("mask.wgsl");
+        let mask_pass = VolumePass::new::<MaskVertex>(device, pool, "pvmf::mask_pass", source.clone(), ("vs_mask", "fs_mask"), &attributes, &[DISTANCE_FORMAT]);
+        // The same volumes, every one kept (occluder_distance "farthest_edge" and "darker").
+        let farthest_pass =
+            VolumePass::new_max::<MaskVertex>(device, pool, "pvmf::farthest_pass", source, ("vs_mask", "fs_mask_far"), &attributes, &[FARTHEST_FORMAT]);
         let storage = layout::visibility_storage;
         // Reads the map, the mask's depth and d_e, the test and settings blocks;
         // writes the raw estimate, the blur mask, the filter width and the counters.
@@ -501,6 +489,7 @@ impl PenumbraVolumeMaskFiltering {
             let mask_projection = projection.with_near(projection.far() * 1e-4);
             let vertices = self.mask_pass.upload(ctx, &vertices)?;
             let depth = self.mask_pass.record_uploaded(ctx, encoder, &mask_projection, &vertices, map, &[&edge_distance], ts);
+            let depth = depth.expect("the mask pass (VolumePass::new) returns its depth map");
             Ok((depth, stats, cache_hits, vertices))
         })??;
         // The same volumes again, without the depth test (its own pass, timed apart).
@@ -508,7 +497,7 @@ impl PenumbraVolumeMaskFiltering {
             let farthest = frame.ctx.light_texture("pvmf::farthest_distance", map, projection.layers(), FARTHEST_FORMAT, usage);
             frame.pass("mask_farthest", |ctx, encoder, ts| {
                 let mask_projection = projection.with_near(projection.far() * 1e-4);
-                self.farthest_pass.record_max(ctx, encoder, &mask_projection, &vertices, map, &[&farthest], ts);
+                self.farthest_pass.record_uploaded(ctx, encoder, &mask_projection, &vertices, map, &[&farthest], ts);
             })?;
             Some(farthest)
         } else {
