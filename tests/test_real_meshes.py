@@ -112,17 +112,19 @@ CONFIGS: dict[str, tuple[str, dict[str, Any]]] = {
 
 # Penumbra visibility RMSE measured by benchmarks/real_meshes.toml (160 x 160,
 # ground truth at 1024 samples, whose own noise is 0.002-0.003 here) per
-# scene and configuration; each test allows it 15% and 0.005 more.
+# scene and configuration; each test allows it 15% and 0.005 more. pvmf's
+# since occluder_distance="darker" became its default (issue 28; the
+# benchmark's row "occluder_distance=nearest_volume" has the values before).
 MEASURED: dict[str, dict[str, float]] = {
-    "cube.obj close r=0.3": {"pvm": 0.0425, "pvm-no-falloff": 0.0154, "pvmf": 0.0263},
-    "cube.obj close r=0.8": {"pvm": 0.0680, "pvm-no-falloff": 0.0523, "pvmf": 0.0494},
-    "cube.obj wide_floor r=0.3": {"pvm": 0.0782, "pvm-no-falloff": 0.0382, "pvmf": 0.0472},
-    "spot.obj close r=0.3": {"pvm": 0.1100, "pvm-no-falloff": 0.0899, "pvmf": 0.0545},
-    "spot.obj close r=0.8": {"pvm": 0.1132, "pvm-no-falloff": 0.0984, "pvmf": 0.0495},
-    "spot.obj wide_floor r=0.3": {"pvm": 0.1024, "pvm-no-falloff": 0.0881, "pvmf": 0.0532},
-    "teapot-mcguire-closed.obj close r=0.3": {"pvm": 0.0658, "pvm-no-falloff": 0.0255, "pvmf": 0.0376},
-    "teapot-mcguire-closed.obj close r=0.8": {"pvm": 0.1095, "pvm-no-falloff": 0.0912, "pvmf": 0.0601},
-    "teapot-mcguire-closed.obj wide_floor r=0.3": {"pvm": 0.1028, "pvm-no-falloff": 0.0776, "pvmf": 0.0410},
+    "cube.obj close r=0.3": {"pvm": 0.0425, "pvm-no-falloff": 0.0154, "pvmf": 0.0173},
+    "cube.obj close r=0.8": {"pvm": 0.0680, "pvm-no-falloff": 0.0523, "pvmf": 0.0430},
+    "cube.obj wide_floor r=0.3": {"pvm": 0.0782, "pvm-no-falloff": 0.0382, "pvmf": 0.0406},
+    "spot.obj close r=0.3": {"pvm": 0.1100, "pvm-no-falloff": 0.0899, "pvmf": 0.0396},
+    "spot.obj close r=0.8": {"pvm": 0.1132, "pvm-no-falloff": 0.0984, "pvmf": 0.0479},
+    "spot.obj wide_floor r=0.3": {"pvm": 0.1024, "pvm-no-falloff": 0.0881, "pvmf": 0.0491},
+    "teapot-mcguire-closed.obj close r=0.3": {"pvm": 0.0658, "pvm-no-falloff": 0.0255, "pvmf": 0.0279},
+    "teapot-mcguire-closed.obj close r=0.8": {"pvm": 0.1095, "pvm-no-falloff": 0.0912, "pvmf": 0.0522},
+    "teapot-mcguire-closed.obj wide_floor r=0.3": {"pvm": 0.1028, "pvm-no-falloff": 0.0776, "pvmf": 0.0364},
 }
 # Issue 15's targets, which every scene meets (the benchmark's targets table):
 # penumbra RMSE at most half of hard's; stray pixels under 0.5%; pvmf's
@@ -253,12 +255,12 @@ def test_a_failed_bound_leaves_the_images_behind(renderer: penumbra.Renderer, tr
 # defaults, pvmf with its defaults), each allowed 15% and 0.005
 # more, and the same targets as the closed meshes.
 OPEN_MEASURED: dict[tuple[str, float], dict[str, float]] = {
-    ("bun_zipper.ply", 0.3): {"pvm": 0.1327, "pvmf": 0.0876},
-    ("bun_zipper.ply", 0.8): {"pvm": 0.1208, "pvmf": 0.0776},
-    ("bun_zipper_res4.ply", 0.3): {"pvm": 0.0912, "pvmf": 0.0639},
-    ("bun_zipper_res4.ply", 0.8): {"pvm": 0.1092, "pvmf": 0.0511},
-    ("CornellBox-Original.obj", 0.3): {"pvm": 0.0736, "pvmf": 0.0489},
-    ("CornellBox-Original.obj", 0.8): {"pvm": 0.0884, "pvmf": 0.0752},
+    ("bun_zipper.ply", 0.3): {"pvm": 0.1327, "pvmf": 0.0662},
+    ("bun_zipper.ply", 0.8): {"pvm": 0.1208, "pvmf": 0.0634},
+    ("bun_zipper_res4.ply", 0.3): {"pvm": 0.0912, "pvmf": 0.0543},
+    ("bun_zipper_res4.ply", 0.8): {"pvm": 0.1092, "pvmf": 0.0447},
+    ("CornellBox-Original.obj", 0.3): {"pvm": 0.0736, "pvmf": 0.0363},
+    ("CornellBox-Original.obj", 0.8): {"pvm": 0.0884, "pvmf": 0.0640},
 }
 
 

@@ -88,7 +88,7 @@ class Timing:
 #: The repairs for real meshes (``repairs``, ``bias``, ``blur_min_width``)
 #: keep their defaults here.
 PAPER: dict[str, dict[str, Any]] = {
-    "pvmf": {"kernel": "square", "n_blur": 12, "offsets": "unit", "umbra": "filter", "s_e": 0.5, "mask_size": "map"},
+    "pvmf": {"kernel": "square", "n_blur": 12, "offsets": "unit", "umbra": "filter", "s_e": 0.5, "mask_size": "map", "occluder_distance": "nearest_volume"},
     # Fernando 2005: the plane test, uniform search taps, the mean blocker
     # depth, and the centre's test alone (no horizon repair).
     "pcss": {"blocker_test": "plane", "search": "uniform", "blocker_depth": "mean", "horizon": False},

@@ -60,9 +60,9 @@ var<private> settings: PvmfSettings;
 // nearer the light than the receiver (d_r): a volume starts at its edge, so
 // it can hold the receiver only then. Otherwise the tap keeps d_e.
 // Returns (d_o from the nearest volumes, d_o from the farthest edges); the
-// second is the first without "farthest_edge" or "darker".
+// second is the first without "farthest_edge".
 fn occluder_distance(r: Receiver, d_r: f32) -> vec2<f32> {
-    let farthest_edge = (settings.flags & 96u) != 0u;
+    let farthest_edge = (settings.flags & 32u) != 0u;
     let ls = pvmf.light_space;
     let centre = vec2<i32>(floor(r.coords));
     var sum = vec2<f32>(0.0);
@@ -185,6 +185,20 @@ fn area_estimate(r: Receiver, p: vec3<f32>, px: vec2<u32>, d_r: f32, spread_o: f
     return hidden;
 }
 
+// The lit fraction of a receiver at p (d_r from the light) filtered for an
+// occluder distance d_o, w = filter_width(r, p, d_o): 5.2's count of
+// failing taps, or estimate = "area".
+fn filtered(r: Receiver, p: vec3<f32>, px: vec2<u32>, d_r: f32, d_o: f32, w: vec2<f32>) -> f32 {
+    // A kernel narrower than a texel is the receiver's own test: there the
+    // taps' cones shrink to nothing, and 5.2's filter serves.
+    if ((settings.flags & 8u) != 0u && min(w.x, w.y) >= 1.0) {
+        let spread_o = max(d_r - d_o, 0.0) / max(d_o, 1e-30);
+        let w_o = unclamped_width(r, p, spread_o);
+        return 1.0 - min(area_estimate(r, p, px, d_r, spread_o, w, w_o), 1.0);
+    }
+    return pcf_estimate(r, p, px, w);
+}
+
 // Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
 fn shade(pixel: ScreenPixel) {
     pvmf = pvmf_params;
@@ -222,26 +236,26 @@ fn shade(pixel: ScreenPixel) {
                 let d_o = select(distances.x, distances.y, (settings.flags & 32u) != 0u);
                 let w = filter_width(r, p, d_o);
                 width = w.x;
-                let n_pcf = settings.n_pcf;
-                let area = (settings.flags & 8u) != 0u;
-                let spread_o = max(d_r - d_o, 0.0) / max(d_o, 1e-30);
-                let w_o = unclamped_width(r, p, spread_o);
-                // A kernel narrower than a texel is the receiver's own test:
-                // there the taps' cones shrink to nothing, and 5.2's filter serves.
                 // occluder_distance "darker" (beyond 5.2, issue 28): where the
-                // farthest enclosing edges lie beyond the nearest volumes' (a
-                // second caster nearer the light, or a caster's far rim), one
-                // filter per d_o, and the lower lit fraction. The wide filter
-                // spreads a nearer-the-receiver caster's umbra over lit floor;
-                // the narrow one misses a near-the-light caster's wide
-                // penumbra; each sees an umbra the other loses.
-                let darker = (settings.flags & 64u) != 0u && distances.y > distances.x;
-                if (area && min(w.x, w.y) >= 1.0) {
-                    v = 1.0 - min(area_estimate(r, p, vec2<u32>(pixel.px), d_r, spread_o, w, w_o), 1.0);
-                } else if (darker) {
-                    v = min(pcf_estimate(r, p, vec2<u32>(pixel.px), w), pcf_estimate(r, p, vec2<u32>(pixel.px), filter_width(r, p, distances.y)));
-                } else {
-                    v = pcf_estimate(r, p, vec2<u32>(pixel.px), w);
+                // receiver fails the test and the occluder on its centre ray
+                // (z_c, the map's texel) lies farther from the light than the
+                // nearest volume's edges (d_o), the mask names another caster,
+                // nearer the light, than the one shadowing the receiver
+                // (generated scene 37: a boot near the light over a koala,
+                // whose umbra the boot's wide filter lit). A second filter
+                // sized for z_c, as PCSS would size it for that one blocker,
+                // and the lower lit fraction: the wide filter spreads the
+                // farther caster's umbra over lit floor, the narrow one misses
+                // the nearer caster's wide penumbra, and each keeps an umbra
+                // the other loses. docs/methods/pvmf.md measures it.
+                v = filtered(r, p, vec2<u32>(pixel.px), d_r, d_o, w);
+                if ((settings.flags & 64u) != 0u && !lit) {
+                    let ls = pvmf.light_space;
+                    // light_ray has unit depth along the layer's axis, so depth * |ray| is the distance.
+                    let z_c = map_point_depth(ls, shadow_map, MapPoint(r.layer, floor(r.coords) + 0.5)) * length(light_ray(ls, r.layer, r.coords));
+                    if (z_c > distances.x) {
+                        v = min(v, filtered(r, p, vec2<u32>(pixel.px), d_r, z_c, filter_width(r, p, z_c)));
+                    }
                 }
                 // 5.3 blurs every filtered pixel; a filter narrower than
                 // blur_min_width texels left no jitter noise to hide.

@@ -71,8 +71,9 @@ pub enum OccluderDistance {
     /// The edge farthest from the light whose volume covers the receiver's
     /// texel and which lies nearer the light than the receiver.
     FarthestEdge,
-    /// Both, where they differ: a filter for each d_o, the lower lit
-    /// fraction kept.
+    /// The mask's, and where the receiver fails the shadow-map test behind
+    /// an occluder farther from the light than that d_o, a second filter
+    /// sized for that occluder's distance; the lower lit fraction is kept.
     Darker,
 }
 
@@ -89,7 +90,7 @@ impl OccluderDistance {
 
     /// Whether the mask pass also keeps the farthest edge per texel.
     pub fn farthest(self) -> bool {
-        self != Self::NearestVolume
+        self == Self::FarthestEdge
     }
 }
 
@@ -299,9 +300,9 @@ impl MethodParams for PvmfParams {
             // Departure from 5.2 (issue 28): `occluder_distance` below.
             ParamSpec::choice(
                 "occluder_distance",
-                "nearest_volume",
+                "darker",
                 &OccluderDistance::NAMES,
-                "where d_o (5.2) comes from: the d_e of the volume nearest the light at the receiver's texel (the mask's channel, 5.1); of the edge farthest from the light whose volume covers that texel and which lies nearer the light than the receiver (a caster near the light then no longer widens the filter of a farther caster's shadow); or darker: a filter for each where they differ, the lower lit fraction kept (docs/methods/pvmf.md)",
+                "where d_o (5.2) comes from: the d_e of the volume nearest the light at the receiver's texel (the mask's channel, 5.1); of the edge farthest from the light whose volume covers that texel and which lies nearer the light than the receiver (a caster near the light then no longer widens the filter of a farther caster's shadow); or darker: the mask's, and where the receiver fails the shadow-map test behind an occluder farther from the light than that d_o, a second filter sized for that occluder's distance, the lower lit fraction kept (docs/methods/pvmf.md)",
             ),
             OpenEdges::spec(),
             ParamSpec::choice(
@@ -314,11 +315,6 @@ impl MethodParams for PvmfParams {
     }
 
     fn parse(p: &ParamSet) -> Result<PvmfParams> {
-        if p.choice("estimate") == "area" && p.choice("occluder_distance") == "darker" {
-            return Err(Error::InvalidParameter(
-                "pvmf: occluder_distance='darker' takes the lower of two 5.2 filters; estimate='area' weighs each tap by its own occluder in one filter instead (use one or the other)".to_owned(),
-            ));
-        }
         if p.choice("estimate") == "area" && p.choice("kernel") == "square" {
             return Err(Error::InvalidParameter(
                 "pvmf: estimate='area' takes its taps on the disk the light projects to; kernel='square' does not apply (use kernel='disk')".to_owned(),
@@ -359,7 +355,7 @@ impl Method for PenumbraVolumeMaskFiltering {
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32];
         let source = crate::shader!("mask.wgsl");
         let mask_pass = VolumePass::new::<MaskVertex>(device, pool, "pvmf::mask_pass", source.clone(), ("vs_mask", "fs_mask"), &attributes, &[DISTANCE_FORMAT]);
-        // The same volumes, every one kept (occluder_distance "farthest_edge" and "darker").
+        // The same volumes, every one kept (occluder_distance "farthest_edge").
         let farthest_pass =
             VolumePass::new_max::<MaskVertex>(device, pool, "pvmf::farthest_pass", source, ("vs_mask", "fs_mask_far"), &attributes, &[FARTHEST_FORMAT]);
         let storage = layout::visibility_storage;
