@@ -18,7 +18,11 @@
 //! `kernel = "disk"` samples the disk the light projects to rather than a
 //! square; `umbra = "skip"` gives pixels that fail the test outside every
 //! volume v = 0 without filtering; `bias = "midpoint"` is the mid-point map
-//! the paper names as future work.
+//! the paper names as future work; `occluder_distance = "darker"` (the
+//! default) filters a shadowed receiver a second time for the occluder on
+//! its centre ray where that lies beyond the mask's edges, and
+//! `"farthest_edge"` takes d_o from the farthest enclosing edges (a second,
+//! depthless mask pass).
 
 use std::sync::Arc;
 
