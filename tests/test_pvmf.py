@@ -242,7 +242,7 @@ def test_one_caster_gives_the_same_image_whatever_the_occluder_distance(renderer
     base = renderer.render(scene, "pvmf", occluder_distance="nearest_volume")
     assert "mask_farthest" not in base.timings
     for choice in ("farthest_edge", "darker"):
-        other = renderer.render(scene, "pvmf", occluder_distance=choice)
+        other = renderer.render(scene, "pvmf", occluder_distance=choice, intermediates=True)
         assert ("mask_farthest" in other.timings) == (choice == "farthest_edge")
         off = np.abs(other.visibility - base.visibility) > 0.05
         assert off.mean() < 0.01, f"{choice}: {off.mean():.2%} of pixels moved by more than 0.05"

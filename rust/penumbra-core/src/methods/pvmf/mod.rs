@@ -455,9 +455,8 @@ impl Method for PenumbraVolumeMaskFiltering {
         frame.counters(&counters, &COUNTERS);
         frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth, projection.far()));
         frame.intermediate(Intermediate::color("pvmf_edge_distance", &mask.edge_distance, 1));
-        if let Some(farthest) = &mask.farthest_distance {
-            frame.intermediate(Intermediate::color("pvmf_farthest_distance", farthest, 1));
-        }
+        // The farthest-edge channel (R16Float) is not an intermediate: their
+        // readback takes 32-bit texels.
         frame.intermediate(Intermediate::color("pvmf_visibility_raw", &estimate.raw, 1));
         frame.intermediate(Intermediate::color("pvmf_blur_mask", &estimate.blur_mask, 1));
         frame.intermediate(Intermediate::color("pvmf_filter_width", &estimate.filter_width, 1));
