@@ -64,6 +64,24 @@ impl Intermediate {
     pub fn color(name: &'static str, texture: &wgpu::Texture, channels: usize) -> Self {
         Self { name, texture: texture.clone(), aspect: wgpu::TextureAspect::All, channels, scale: 1.0 }
     }
+
+    /// Whether the readback can take this image (`readable`).
+    pub fn readable(&self) -> Result<()> {
+        readable(self.name, self.texture.format(), self.aspect, self.channels)
+    }
+}
+
+/// Whether the readback can take `channels` of a texture of `format`: 32
+/// bits per stored channel (it reads texels as float32 words) and at least
+/// `channels` of them.
+fn readable(name: &str, format: wgpu::TextureFormat, aspect: wgpu::TextureAspect, channels: usize) -> Result<()> {
+    let stored = format.components_with_aspect(aspect) as usize;
+    if stored == 0 || format.block_copy_size(Some(aspect)) != Some(4 * stored as u32) || channels == 0 || channels > stored {
+        return Err(Error::Gpu(format!(
+            "intermediate image {name}: its texture ({format:?}, {channels} channel(s) asked) is not 32 bits a channel, so it cannot be read back"
+        )));
+    }
+    Ok(())
 }
 
 /// The camera's G-buffer images of one frame, in pooled textures (the
@@ -562,11 +580,15 @@ impl<'r> Frame<'r> {
         self.want_intermediates
     }
 
-    /// Reads an intermediate image back (when they were asked for).
-    pub fn intermediate(&mut self, image: Intermediate) {
+    /// Reads an intermediate image back (when they were asked for). The
+    /// readback takes 32-bit channels ([`Intermediate::readable`]): another
+    /// texture is an error here rather than a panic at the readback.
+    pub fn intermediate(&mut self, image: Intermediate) -> Result<()> {
         if self.want_intermediates {
+            image.readable()?;
             self.intermediates.push(image);
         }
+        Ok(())
     }
 
     pub(crate) fn into_record(self) -> FrameRecord<'r> {
@@ -615,5 +637,18 @@ mod tests {
             assert_eq!(map_in_bands(&items, threads, |&i| u64::from(i) * 3 + 1), want, "{threads} threads");
         }
         assert!(map_in_bands(&[] as &[u32], 4, |&i| i).is_empty());
+    }
+
+    #[test]
+    fn only_32_bit_channels_are_read_back_as_intermediates() {
+        use wgpu::{TextureAspect as A, TextureFormat as F};
+        for (format, aspect, channels) in [(F::R32Float, A::All, 1), (F::Rgba32Float, A::All, 3), (F::R32Uint, A::All, 1), (F::Depth32Float, A::DepthOnly, 1)] {
+            assert!(readable("x", format, aspect, channels).is_ok(), "{format:?}");
+        }
+        // pvmf's farthest-edge channel is R16Float: it used to panic in the readback.
+        for (format, aspect, channels) in [(F::R16Float, A::All, 1), (F::Rgba8Unorm, A::All, 1), (F::Depth24Plus, A::DepthOnly, 1), (F::R32Float, A::All, 2), (F::R32Float, A::All, 0)] {
+            let err = readable("pvmf_far", format, aspect, channels).unwrap_err().to_string();
+            assert!(err.contains("pvmf_far") && err.contains("32 bits"), "{format:?}: {err}");
+        }
     }
 }

@@ -43,7 +43,7 @@ pub fn centre_map(frame: &mut Frame<'_>, settings: &ShadowMapSettings) -> Result
     frame.stat("non_casters", frame.ctx.non_casters() as i64);
     frame.stat("cube_map", i64::from(projection.is_cube()));
     frame.stat("shadow_map_faces", projection.active_faces() as i64);
-    frame.intermediate(Intermediate::depth("shadow_map", &map.resource.texture, projection.far()));
+    frame.intermediate(Intermediate::depth("shadow_map", &map.resource.texture, projection.far()))?;
     Ok((map, projection))
 }
 

@@ -560,8 +560,8 @@ impl Method for AdaptiveShadows {
             frame.stat(&format!("maps_level{level}"), new_maps.len() as i64);
             maps.extend(new_maps);
             if let [sums, mask] = images.as_slice() {
-                frame.intermediate(Intermediate::color(SUMS[level as usize], &sums.resource.texture, 1));
-                frame.intermediate(Intermediate::color(MASKS[level as usize], &mask.resource.texture, 1));
+                frame.intermediate(Intermediate::color(SUMS[level as usize], &sums.resource.texture, 1))?;
+                frame.intermediate(Intermediate::color(MASKS[level as usize], &mask.resource.texture, 1))?;
             }
             let Some(failing) = failing else {
                 break;

@@ -414,12 +414,12 @@ impl Method for SoftShadowBackprojection {
 
         frame.stat("hierarchy_levels", hierarchy.layout.levels() as i64);
         frame.counters(&counters, COUNTER_NAMES);
-        frame.intermediate(Intermediate::color("backprojection_class", &classes, 1));
-        frame.intermediate(Intermediate::color("backprojection_kernel", &kernel, 1));
-        frame.intermediate(Intermediate::color("backprojection_level", &level, 1));
-        frame.intermediate(Intermediate::color("backprojection_visibility_sparse", &raw, 1));
+        frame.intermediate(Intermediate::color("backprojection_class", &classes, 1))?;
+        frame.intermediate(Intermediate::color("backprojection_kernel", &kernel, 1))?;
+        frame.intermediate(Intermediate::color("backprojection_level", &level, 1))?;
+        frame.intermediate(Intermediate::color("backprojection_visibility_sparse", &raw, 1))?;
         if let Some(lines) = &lines {
-            frame.intermediate(Intermediate::color("backprojection_discontinuities", lines, 1));
+            frame.intermediate(Intermediate::color("backprojection_discontinuities", lines, 1))?;
         }
         Ok(MethodOutput { visibility })
     }

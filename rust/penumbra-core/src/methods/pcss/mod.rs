@@ -284,8 +284,8 @@ impl Method for PercentageCloserSoftShadows {
             counters
         })?;
         frame.counters(&counters, COUNTER_NAMES);
-        frame.intermediate(Intermediate::color("pcss_penumbra_width", &penumbra_width, 1));
-        frame.intermediate(Intermediate::color("pcss_blocker_depth", &blocker_depth, 1));
+        frame.intermediate(Intermediate::color("pcss_penumbra_width", &penumbra_width, 1))?;
+        frame.intermediate(Intermediate::color("pcss_blocker_depth", &blocker_depth, 1))?;
         Ok(MethodOutput { visibility })
     }
 }

@@ -228,13 +228,13 @@ impl Method for PenumbraVolumeMaps {
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("extrusions_outside_light_cone", s.extrusions_outside_cone as i64);
         frame.counters(&counter, &["pixels_in_volume"]);
-        frame.intermediate(Intermediate::depth("pvm_volume_depth", &volumes.volume_depth, projection.far()));
+        frame.intermediate(Intermediate::depth("pvm_volume_depth", &volumes.volume_depth, projection.far()))?;
         if frame.wants_intermediates() {
             let (edge0, edge1) = frame.untimed(|ctx, encoder| self.record_edge_maps(ctx, encoder, &volumes, volume_map));
-            frame.intermediate(Intermediate::color("pvm_edge0", &edge0, 3));
-            frame.intermediate(Intermediate::color("pvm_edge1", &edge1, 3));
+            frame.intermediate(Intermediate::color("pvm_edge0", &edge0, 3))?;
+            frame.intermediate(Intermediate::color("pvm_edge1", &edge1, 3))?;
         }
-        frame.intermediate(Intermediate::color("pvm_in_volume", &membership, 1));
+        frame.intermediate(Intermediate::color("pvm_in_volume", &membership, 1))?;
         Ok(MethodOutput { visibility })
     }
 }

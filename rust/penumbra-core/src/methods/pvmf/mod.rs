@@ -453,13 +453,13 @@ impl Method for PenumbraVolumeMaskFiltering {
         frame.stat("mask_quads", s.mask_quads as i64);
         frame.stat("mask_size", i64::from(mask_size));
         frame.counters(&counters, &COUNTERS);
-        frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth, projection.far()));
-        frame.intermediate(Intermediate::color("pvmf_edge_distance", &mask.edge_distance, 1));
+        frame.intermediate(Intermediate::depth("pvmf_mask_depth", &mask.mask_depth, projection.far()))?;
+        frame.intermediate(Intermediate::color("pvmf_edge_distance", &mask.edge_distance, 1))?;
         // The farthest-edge channel (R16Float) is not an intermediate: their
         // readback takes 32-bit texels.
-        frame.intermediate(Intermediate::color("pvmf_visibility_raw", &estimate.raw, 1));
-        frame.intermediate(Intermediate::color("pvmf_blur_mask", &estimate.blur_mask, 1));
-        frame.intermediate(Intermediate::color("pvmf_filter_width", &estimate.filter_width, 1));
+        frame.intermediate(Intermediate::color("pvmf_visibility_raw", &estimate.raw, 1))?;
+        frame.intermediate(Intermediate::color("pvmf_blur_mask", &estimate.blur_mask, 1))?;
+        frame.intermediate(Intermediate::color("pvmf_filter_width", &estimate.filter_width, 1))?;
         Ok(MethodOutput { visibility })
     }
 }

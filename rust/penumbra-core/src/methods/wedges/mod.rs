@@ -331,8 +331,8 @@ impl Method for PenumbraWedges {
         frame.stat("binned_wedge_tiles", s.binned as i64);
         frame.counters(&counter.0, &COUNTER_NAMES[..1]);
         frame.counters(&counter.1, &COUNTER_NAMES[1..]);
-        frame.intermediate(Intermediate::color("wedges_hard", &hard, 1));
-        frame.intermediate(Intermediate::color("wedges_intensity", &intensity, 1));
+        frame.intermediate(Intermediate::color("wedges_hard", &hard, 1))?;
+        frame.intermediate(Intermediate::color("wedges_intensity", &intensity, 1))?;
         Ok(MethodOutput { visibility })
     }
 }
