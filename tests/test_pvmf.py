@@ -297,10 +297,10 @@ def test_the_area_estimate_keeps_the_umbra_of_a_caster_under_another(renderer: p
     so 5.2's filter (estimate="pcf") spans the light's projection through the
     plate, far wider than the box's, and counts the box's failing taps as a
     small fraction of it: the box's umbra comes out lit (measured: mean error
-    0.69 there against `reference` at 256 samples, penumbra RMSE 0.085;
-    `hard` 0.256). estimate="area" weighs each failing tap by the part of the
-    light its occluder hides, within that occluder's own light cone: 0.175
-    and 0.068. (Before the floor slab was left out of the shadow map,
+    0.70 there against `reference` at 256 samples, penumbra RMSE 0.081;
+    `hard` 0.255). estimate="area" weighs each failing tap by the part of the
+    light its occluder hides, within that occluder's own light cone: 0.138
+    and 0.059. (Before the floor slab was left out of the shadow map,
     casters.rs, its own texels failed wide filters' taps too: the penumbra
     RMSE was 0.146 with "pcf" and 0.067 with "area".)"""
     base = penumbra.scenes.get("resting_box", width=96, height=96)
