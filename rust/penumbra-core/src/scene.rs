@@ -120,6 +120,38 @@ pub struct PreparedScene {
     pub triangle_count: usize,
     /// Triangles whose area is zero to working precision; they draw nothing.
     pub degenerate_triangles: usize,
+    /// [`Self::mesh_keys`], on first use (the scene is kept while its meshes
+    /// are unchanged, so the silhouette caches hash them once, not per render).
+    mesh_keys: std::sync::OnceLock<Vec<u64>>,
+}
+
+impl PreparedScene {
+    /// Per mesh, a hash of its faces and its vertices' bits: what the
+    /// silhouette caches know a mesh's geometry by.
+    pub fn mesh_keys(&self) -> &[u64] {
+        use std::hash::{Hash, Hasher};
+        self.mesh_keys.get_or_init(|| {
+            self.meshes
+                .iter()
+                .map(|mesh| {
+                    let mut h = std::collections::hash_map::DefaultHasher::new();
+                    mesh.faces.hash(&mut h);
+                    for v in &mesh.vertices {
+                        v.to_array().map(f64::to_bits).hash(&mut h);
+                    }
+                    h.finish()
+                })
+                .collect()
+        })
+    }
+
+    /// A hash of every mesh's geometry, in order ([`Self::mesh_keys`]).
+    pub fn geometry_key(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        self.mesh_keys().hash(&mut h);
+        h.finish()
+    }
 }
 
 /// One mesh in world space, as [`Mesh::world_geometry`] checks and builds it.
@@ -538,6 +570,7 @@ impl Scene {
             bounds_min: lo.as_vec3(),
             bounds_max: hi.as_vec3(),
             degenerate_triangles,
+            mesh_keys: Default::default(),
         })
     }
 }
@@ -618,6 +651,21 @@ pub(crate) mod tests {
             meshes: vec![mesh],
             light: SphereLight { center: [0.0, 2.0, 0.0], radius: 0.5, intensity: [1.0; 3] },
             ambient: [0.0; 3],
+        }
+    }
+
+    #[test]
+    fn geometry_keys_follow_the_meshes_content() {
+        let base = scene(quad()).prepare().unwrap();
+        assert_eq!(base.mesh_keys(), scene(quad()).prepare().unwrap().mesh_keys());
+        assert_eq!(base.geometry_key(), scene(quad()).prepare().unwrap().geometry_key());
+        let mut moved = quad();
+        moved.vertices[0][1] = 1e-6;
+        let mut rewound = quad();
+        rewound.faces[0].swap(1, 2);
+        for (what, mesh) in [("a vertex", moved), ("a face", rewound)] {
+            let other = scene(mesh).prepare().unwrap();
+            assert_ne!(base.geometry_key(), other.geometry_key(), "{what}");
         }
     }
 

@@ -3,7 +3,7 @@
 //! to repeat: topology per mesh content, silhouettes per (mesh, light centre).
 
 use std::collections::HashMap;
-use std::hash::{Hash, Hasher};
+use std::hash::Hash;
 use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
@@ -11,7 +11,7 @@ use glam::DVec3;
 use crate::error::Result;
 use crate::occluders::Occluders;
 use crate::params::ParamSpec;
-use crate::scene::{PreparedMesh, PreparedScene};
+use crate::scene::PreparedScene;
 use crate::topology::{ConnectivityStats, Part, Topology, NO_FACE, WELD_TOLERANCE};
 
 /// The object of a mesh made of several separate surfaces
@@ -296,24 +296,6 @@ impl ConnectivityStats {
     }
 }
 
-fn mesh_key(mesh: &PreparedMesh) -> u64 {
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    mesh.faces.hash(&mut h);
-    for v in &mesh.vertices {
-        v.to_array().map(f64::to_bits).hash(&mut h);
-    }
-    h.finish()
-}
-
-/// The scene's geometry: every mesh's content, in order (its connectivity is built across them).
-fn scene_key(scene: &PreparedScene) -> u64 {
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    for mesh in &scene.meshes {
-        mesh_key(mesh).hash(&mut h);
-    }
-    h.finish()
-}
-
 const CACHE_LIMIT: usize = 64;
 
 /// (scene geometry, light centre bits, whether open edges count).
@@ -342,7 +324,7 @@ impl SilhouetteCache {
     /// pieces, doubled or as a soup gives the edges of its welded form.
     pub fn edges(&self, scene: &PreparedScene, l: DVec3, open_edges: OpenEdges) -> Result<(Vec<SilhouetteEdge>, usize, ConnectivityStats)> {
         let boundary = open_edges == OpenEdges::Silhouette;
-        let key = scene_key(scene);
+        let key = scene.geometry_key();
         let topology = self.topology(key, scene);
         let names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
         topology.require_closed(&names, boundary)?;
@@ -362,7 +344,7 @@ impl SilhouetteCache {
 
     /// The scene's connectivity across every mesh, through the cache.
     pub fn scene_topology(&self, scene: &PreparedScene) -> Arc<Topology> {
-        self.topology(scene_key(scene), scene)
+        self.topology(scene.geometry_key(), scene)
     }
 
     /// Each mesh's object for the object map (`passes::object_map`): the
@@ -372,7 +354,7 @@ impl SilhouetteCache {
     /// sliver's stray corner does not split its mesh; a surface split over
     /// meshes is one object.
     pub fn mesh_objects(&self, scene: &PreparedScene) -> Vec<u32> {
-        let topology = self.topology(scene_key(scene), scene);
+        let topology = self.topology(scene.geometry_key(), scene);
         // None: no face yet; Some(MANY): faces of several components.
         let mut objects: Vec<Option<u32>> = vec![None; scene.meshes.len()];
         for (face, &part) in topology.faces.iter().zip(&topology.face_part) {
@@ -404,7 +386,7 @@ impl SilhouetteCache {
         if !hidden {
             return Ok(SceneSilhouette { edges, cache_hits, hidden_edges: 0, connectivity });
         }
-        let key = (scene_key(scene), l.to_array().map(f64::to_bits), open_edges == OpenEdges::Silhouette);
+        let key = (scene.geometry_key(), l.to_array().map(f64::to_bits), open_edges == OpenEdges::Silhouette);
         if let Some(seen) = self.visible.lock().ok().and_then(|c| c.get(&key).cloned()) {
             return Ok(SceneSilhouette { edges: seen.0.clone(), cache_hits, hidden_edges: seen.1, connectivity });
         }
@@ -420,7 +402,7 @@ impl SilhouetteCache {
     }
 
     fn occluders(&self, scene: &PreparedScene) -> Arc<Occluders> {
-        let keys: Vec<u64> = scene.meshes.iter().map(mesh_key).collect();
+        let keys = scene.mesh_keys().to_vec();
         if let Some((k, occ)) = self.occluders.lock().ok().and_then(|c| c.clone()) {
             if k == keys {
                 return occ;
