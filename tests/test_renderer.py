@@ -96,6 +96,22 @@ def test_intermediates_and_params_are_reported(renderer: penumbra.Renderer) -> N
     np.testing.assert_array_equal(plain.radiance, full.radiance)
 
 
+@pytest.mark.parametrize("method", penumbra.methods())
+def test_every_method_reads_its_intermediates_back(renderer: penumbra.Renderer, method: str) -> None:
+    """Every intermediate image a method exposes can be read back (32 bits
+    a channel: `Frame::intermediate` refuses others with an error, where the
+    readback used to panic), is finite, and leaves the image unchanged."""
+    scene = penumbra.scenes.get(width=32, height=32)
+    small = {"map_size": 256} if "map_size" in penumbra.render.method_info(method).defaults() else {}
+    plain = renderer.render(scene, method, **small)
+    full = renderer.render(scene, method, **small, intermediates=True)
+    extra = set(full.images) - set(plain.images)
+    for name in extra:
+        image = np.asarray(full.images[name])
+        assert image.size > 0 and np.isfinite(image).all(), name
+    np.testing.assert_array_equal(plain.visibility, full.visibility)
+
+
 @pytest.mark.parametrize("bias", ["slope", "second_depth"])
 def test_bias_schemes_show_no_acne_on_lit_surfaces(renderer: penumbra.Renderer, bias: str) -> None:
     # No pixel whose light centre is above its horizon and unoccluded in the
