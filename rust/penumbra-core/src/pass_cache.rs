@@ -95,19 +95,13 @@ impl PassKey {
 }
 
 /// A 64-bit hash of what the passes read of a scene's geometry: the corners
-/// (positions, normals and mesh indices) and every mesh's vertices and faces.
+/// (positions, normals and mesh indices) and every mesh's vertices and faces
+/// (`PreparedScene::mesh_keys`, hashed once and shared with the silhouette caches).
 pub fn geometry_hash(scene: &PreparedScene) -> u64 {
     let mut h = std::collections::hash_map::DefaultHasher::new();
     let corners: &[u8] = bytemuck::cast_slice(&scene.corners);
     corners.hash(&mut h);
-    scene.meshes.len().hash(&mut h);
-    for mesh in &scene.meshes {
-        mesh.faces.hash(&mut h);
-        mesh.vertices.len().hash(&mut h);
-        for v in &mesh.vertices {
-            v.to_array().map(f64::to_bits).hash(&mut h);
-        }
-    }
+    scene.mesh_keys().hash(&mut h);
     h.finish()
 }
 

@@ -136,6 +136,7 @@ impl PreparedScene {
                 .map(|mesh| {
                     let mut h = std::collections::hash_map::DefaultHasher::new();
                     mesh.faces.hash(&mut h);
+                    mesh.vertices.len().hash(&mut h);
                     for v in &mesh.vertices {
                         v.to_array().map(f64::to_bits).hash(&mut h);
                     }
