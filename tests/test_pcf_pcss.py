@@ -261,7 +261,7 @@ def test_the_papers_settings_are_parameters_the_defaults_depart_from(renderer: p
     parameter of the method, its default differs, and a render takes them."""
     from penumbra.comparison import PAPER
 
-    assert {"pcss", "pvmf"} <= set(PAPER)
+    assert {"pcss", "pvm", "pvmf"} <= set(PAPER)
     scene = penumbra.scenes.get(width=16, height=16)
     for method, params in PAPER.items():
         defaults = penumbra.method_info(method).defaults()

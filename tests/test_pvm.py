@@ -180,7 +180,7 @@ def test_pvm_parameters_are_checked(renderer: penumbra.Renderer) -> None:
         renderer.render(scene, "pvm", falloff=1)
     with pytest.raises(penumbra.ParameterError, match="open_edges"):
         renderer.render(scene, "pvm", open_edges="ignore")
-    assert renderer.render(scene, "pvm").params["falloff"] is True
+    assert renderer.render(scene, "pvm").params["falloff"] is False
 
 
 

@@ -84,13 +84,16 @@ class Timing:
 
 #: The paper's values of the parameters whose defaults depart from it for
 #: accuracy, by method: the faithful version that the tests and benchmarks
-#: measure beside the defaults (docs/methods/pvmf.md, docs/methods/pcss.md).
+#: measure beside the defaults (docs/methods/pvmf.md, docs/methods/pcss.md,
+#: docs/methods/pvm.md).
 #: The repairs for real meshes (``repairs``, ``bias``, ``blur_min_width``)
 #: keep their defaults here.
 PAPER: dict[str, dict[str, Any]] = {
     "pvmf": {"kernel": "square", "n_blur": 12, "offsets": "unit", "umbra": "filter", "s_e": 0.5, "mask_size": "map", "occluder_distance": "nearest_volume"},
     # Fernando 2005: the plane test, uniform search taps, the mean blocker
     # depth, and the centre's test alone (no horizon repair).
+    # Cournia 4.2: the 3k^2 - 2k^3 interpolant of the disk fraction.
+    "pvm": {"falloff": True},
     "pcss": {"blocker_test": "plane", "search": "uniform", "blocker_depth": "mean", "horizon": False},
 }
 
