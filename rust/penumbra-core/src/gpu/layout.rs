@@ -312,6 +312,11 @@ pub fn nearest_depth(format: wgpu::TextureFormat) -> Option<wgpu::DepthStencilSt
     })
 }
 
+/// As [`nearest_depth`], keeping the farthest fragment (for a map cleared to 0).
+pub fn farthest_depth(format: wgpu::TextureFormat) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState { depth_compare: Some(wgpu::CompareFunction::Greater), ..nearest_depth(format)? })
+}
+
 pub fn view(texture: &wgpu::Texture) -> wgpu::TextureView {
     texture.create_view(&wgpu::TextureViewDescriptor::default())
 }

@@ -15,10 +15,19 @@ pub struct VolumePass {
     name: &'static str,
     pipeline: wgpu::RenderPipeline,
     layout: Layout,
-    /// Whether the pass keeps the nearest volume in a depth map
-    /// ([`Self::new`]) or keeps, without depth, the largest value each
-    /// colour target receives ([`Self::new_max`]).
-    depth: bool,
+    /// What the pass keeps per texel.
+    keep: Keep,
+}
+
+/// What a [`VolumePass`] keeps per texel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Keep {
+    /// The volume nearest the light, in a depth map ([`VolumePass::new`]).
+    Nearest,
+    /// The volume farthest from the light, in a depth map ([`VolumePass::new_farthest`]).
+    Farthest,
+    /// Without depth, the largest value each colour target receives ([`VolumePass::new_max`]).
+    Max,
 }
 
 impl VolumePass {
@@ -36,7 +45,22 @@ impl VolumePass {
         targets: &[wgpu::TextureFormat],
     ) -> Self {
         let targets: Vec<_> = targets.iter().map(|&f| Some(f.into())).collect();
-        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, true)
+        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, Keep::Nearest)
+    }
+
+    /// As [`Self::new`], keeping the volume farthest from the light (its
+    /// depth map cleared to 0 and tested `Greater`).
+    pub fn new_farthest<V>(
+        device: &wgpu::Device,
+        pool: &ResourcePool,
+        name: &'static str,
+        source: String,
+        entry_points: (&str, &str),
+        attributes: &[wgpu::VertexAttribute],
+        targets: &[wgpu::TextureFormat],
+    ) -> Self {
+        let targets: Vec<_> = targets.iter().map(|&f| Some(f.into())).collect();
+        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, Keep::Farthest)
     }
 
     /// As [`Self::new`], but without a depth map: every volume's fragments
@@ -55,7 +79,7 @@ impl VolumePass {
         let max = wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Max };
         let blend = Some(wgpu::BlendState { color: max, alpha: max });
         let targets: Vec<_> = targets.iter().map(|&format| Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL })).collect();
-        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, false)
+        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, Keep::Max)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -67,7 +91,7 @@ impl VolumePass {
         (vs, fs): (&str, &str),
         attributes: &[wgpu::VertexAttribute],
         targets: &[Option<wgpu::ColorTargetState>],
-        depth: bool,
+        keep: Keep,
     ) -> Self {
         let layout = pool.layout(device, name, &[layout::uniform(0)]);
         let module = crate::shaders::module(device, name, source);
@@ -79,9 +103,13 @@ impl VolumePass {
         // Both sides of every quadrilateral: the volume nearest the light (or
         // every volume, without depth), whichever way it faces.
         let primitive = wgpu::PrimitiveState { cull_mode: None, ..Default::default() };
-        let depth_stencil = if depth { layout::nearest_depth(formats::DEPTH) } else { None };
+        let depth_stencil = match keep {
+            Keep::Nearest => layout::nearest_depth(formats::DEPTH),
+            Keep::Farthest => layout::farthest_depth(formats::DEPTH),
+            Keep::Max => None,
+        };
         let pipeline = layout::render_pipeline(device, name, &layout, &module, (vs, fs), &buffers, primitive, depth_stencil, targets);
-        Self { name, pipeline, layout, depth }
+        Self { name, pipeline, layout, keep }
     }
 
     /// Records the pass into a new `map_size` depth map with a layer per
@@ -176,7 +204,8 @@ impl VolumePass {
         timestamps: Option<PassTimestamps<'_>>,
         draw: impl Fn(&mut wgpu::RenderPass<'_>),
     ) -> Option<PooledTexture> {
-        let depth = self.depth.then(|| ShadowMapPass::create_map(ctx, map_size, projection.layers()));
+        let depth = (self.keep != Keep::Max).then(|| ShadowMapPass::create_map(ctx, map_size, projection.layers()));
+        let cleared_depth = if self.keep == Keep::Farthest { 0.0 } else { 1.0 };
         let faces: Vec<(u32, &LightFrustum)> = projection.active_layers().collect();
         for (k, (layer, frustum)) in faces.iter().enumerate() {
             let layer = *layer as usize;
@@ -194,7 +223,7 @@ impl VolumePass {
                 color_attachments: &attachments,
                 depth_stencil_attachment: depth.as_ref().map(|depth| wgpu::RenderPassDepthStencilAttachment {
                     view: &depth.layer_views[layer],
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(cleared_depth), store: wgpu::StoreOp::Store }),
                     stencil_ops: None,
                 }),
                 timestamp_writes: timestamps.and_then(|t| t.render_part(k == 0, k + 1 == faces.len())),

@@ -69,6 +69,11 @@ pub struct PvmParams {
     /// `FrameContext::receiver_image_size`) rather than at the shadow map's size
     /// (`"map"`, the paper's 4.1.3).
     pub volume_map_auto: bool,
+    /// `edges = "two"` (beyond 4.1.3, which keeps the volume nearest the
+    /// light): a second edge map keeps the volume farthest from the light,
+    /// and a pixel inside both edges' penumbrae takes the light the two
+    /// edges leave it together (`two_edge_visibility` in visibility.wgsl).
+    pub two_edges: bool,
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`).
     pub repairs: Repairs,
@@ -79,6 +84,8 @@ pub struct PvmVolumes {
     pub volume_depth: PooledTexture,
     /// Per texel, the index + 1 into `edges` of the volume nearest the light (0: none).
     pub edge_index: PooledTexture,
+    /// With `edges = "two"`, the same for the volume farthest from the light.
+    pub far_edge_index: Option<PooledTexture>,
     /// The silhouette edges' end points ([`EdgePoints`]; one zeroed entry when there is none).
     pub edges: PooledBuffer,
     pub stats: VolumeStats,
@@ -92,7 +99,7 @@ pub fn volumes_key(params: &PvmParams, projection: &LightProjection, (l, r): (DV
     key.f64s(&l.to_array())
         .f64s(&[r])
         .bytes(params.open_edges.name().as_bytes())
-        .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden)])
+        .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden), u8::from(params.two_edges)])
         .projection(projection)
         .u32(params.shadow.map_size)
         .u32(volume_map);
@@ -100,6 +107,7 @@ pub fn volumes_key(params: &PvmParams, projection: &LightProjection, (l, r): (DV
 
 pub struct PenumbraVolumeMaps {
     volume_pass: VolumePass,
+    far_volume_pass: VolumePass,
     object_pass: VolumePass,
     visibility: ScreenPass,
     edge_maps_pipeline: wgpu::ComputePipeline,
@@ -126,6 +134,15 @@ impl MethodParams for PvmParams {
             // a few pixels wide (the teapot close under r = 0.3: penumbra RMSE
             // 0.045 against 0.033, tests/test_real_meshes.py), though over
             // the 40 generated scenes the median is 0.1341 against 0.1339.
+            // An option beyond 4.1.3 (issue 28), whose map keeps one edge per
+            // texel: where two edges' penumbrae overlap (a shadow thinner than
+            // the light's, two casters), one edge's disk fraction is wrong.
+            ParamSpec::choice(
+                "edges",
+                "one",
+                &["one", "two"],
+                "edges per volume-map texel: one, the volume nearest the light (4.1.3); two, also the farthest, combined where a pixel lies in both penumbrae",
+            ),
             ParamSpec::choice(
                 "volume_map_size",
                 "map",
@@ -147,6 +164,7 @@ impl MethodParams for PvmParams {
             shadow: ShadowMapSettings::from_params(p),
             falloff: p.bool("falloff"),
             volume_map_auto: p.choice("volume_map_size") == "auto",
+            two_edges: p.choice("edges") == "two",
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
         })
@@ -172,11 +190,21 @@ impl Method for PenumbraVolumeMaps {
             &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
             &[EDGE_INDEX_FORMAT],
         );
+        let far_volume_pass = VolumePass::new_farthest::<VolumeVertex>(
+            device,
+            pool,
+            "pvm::far_volume_pass",
+            crate::shaders::compose("passes/light_ids.wgsl"),
+            ("vs_main", "fs_main"),
+            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
+            &[EDGE_INDEX_FORMAT],
+        );
         // Reads the map, the volume map's depth and edge indices, the edges and
-        // the test block; writes visibility, membership and the counter.
+        // the test block; writes visibility, membership and the counter; reads
+        // the far edge indices.
         let bindings = object_map::with_bindings(&[
             layout::depth_array, layout::depth_array, uint_array, layout::parameters, layout::parameters,
-            layout::visibility_storage, layout::visibility_storage, layout::storage_buffer_rw,
+            layout::visibility_storage, layout::visibility_storage, layout::storage_buffer_rw, uint_array,
         ]);
         let visibility = ScreenPass::per_pixel(device, pool, "pvm::visibility_pass", crate::shader!("visibility.wgsl"), &bindings);
         let edge_maps_layout = pool.layout(
@@ -186,7 +214,7 @@ impl Method for PenumbraVolumeMaps {
         );
         let edge_maps_pipeline =
             layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shader!("edge_maps.wgsl"), &edge_maps_layout);
-        Self { volume_pass, object_pass: object_map::pass(device, pool), visibility, edge_maps_pipeline, edge_maps_layout }
+        Self { volume_pass, far_volume_pass, object_pass: object_map::pass(device, pool), visibility, edge_maps_pipeline, edge_maps_layout }
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmParams) -> Result<MethodOutput> {
@@ -208,7 +236,10 @@ impl Method for PenumbraVolumeMaps {
         let membership = frame.ctx.screen_texture("pvm::in_volume");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
             let counter = ctx.counters("pvm::pixels_in_volume", 1, encoder);
-            let flags = u32::from(params.falloff) | (u32::from(params.repairs.centre) << 1) | (u32::from(params.repairs.horizon) << 2);
+            let flags = u32::from(params.falloff)
+                | (u32::from(params.repairs.centre) << 1)
+                | (u32::from(params.repairs.horizon) << 2)
+                | (u32::from(volumes.far_edge_index.is_some()) << 3);
             let uniforms = ctx.parameters(
                 "pvm::visibility_uniforms",
                 &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags),
@@ -222,6 +253,8 @@ impl Method for PenumbraVolumeMaps {
                 Binding::Texture(&visibility),
                 Binding::Texture(&membership),
                 Binding::Buffer(&counter),
+                // Without a far map the shader does not read it: the near one stands in.
+                Binding::Texture(volumes.far_edge_index.as_ref().unwrap_or(&volumes.edge_index)),
             ];
             self.visibility.run(ctx, encoder, &objects.after(&resources), ts);
             counter
@@ -251,7 +284,7 @@ impl PenumbraVolumeMaps {
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let edge_index = frame.ctx.light_texture("pvm::edge_index_map", map, projection.layers(), EDGE_INDEX_FORMAT, usage);
         // The CPU work (silhouettes and volumes) is part of the pass's time.
-        let (volume_depth, edges, stats, silhouette_cache_hits) = frame.pass("penumbra_volumes", |ctx, encoder, ts| -> Result<_> {
+        let (volume_depth, vertices, edges, stats, silhouette_cache_hits) = frame.pass("penumbra_volumes", |ctx, encoder, ts| -> Result<_> {
             let (l, r) = (ctx.light.center, ctx.light.radius);
             let (mut cache_hits, mut geometry) = (0, VolumeGeometry::default());
             // A point light has no penumbra: skip the volumes entirely.
@@ -268,10 +301,22 @@ impl PenumbraVolumeMaps {
             let bytes: &[u8] = bytemuck::cast_slice(&points);
             let edges = ctx.buffer("pvm::edges", bytes.len() as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
             ctx.queue.write_buffer(&edges, 0, bytes);
-            let depth = self.volume_pass.record(ctx, encoder, projection, &geometry.vertices, map, &[&edge_index], ts)?;
-            Ok((depth, edges, geometry.stats, cache_hits))
+            let vertices = self.volume_pass.upload(ctx, &geometry.vertices)?;
+            let depth = self.volume_pass.record_uploaded(ctx, encoder, projection, &vertices, map, &[&edge_index], ts);
+            let depth = depth.expect("a depth pass (VolumePass::new) returns its depth map");
+            Ok((depth, vertices, edges, geometry.stats, cache_hits))
         })??;
-        Ok(PvmVolumes { volume_depth, edge_index, edges, stats, silhouette_cache_hits })
+        // edges = "two": the same volumes again, the farthest kept (its own pass, timed apart).
+        let far_edge_index = if params.two_edges {
+            let far = frame.ctx.light_texture("pvm::far_edge_index_map", map, projection.layers(), EDGE_INDEX_FORMAT, usage);
+            frame.pass("far_volumes", |ctx, encoder, ts| {
+                self.far_volume_pass.record_uploaded(ctx, encoder, projection, &vertices, map, &[&far], ts);
+            })?;
+            Some(far)
+        } else {
+            None
+        };
+        Ok(PvmVolumes { volume_depth, edge_index, far_edge_index, edges, stats, silhouette_cache_hits })
     }
 
     /// The paper's two edge maps (4.1.3) rebuilt from the edge-index map,

@@ -18,14 +18,17 @@ struct EdgePoints {
     h1: vec4<f32>,
 };
 @group(0) @binding(5) var<storage, read> edges: array<EdgePoints>;
-// mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon".
+// mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon";
+// bit 3: edges = "two" (the far edge map below is read).
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var<storage, read_write> pixels_in_volume: atomic<u32>;
+// With edges = "two": the index + 1 of the volume farthest from the light.
+@group(0) @binding(10) var far_edge_index: texture_2d_array<u32>;
 // The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
-@group(0) @binding(10) var object_map: texture_2d_array<u32>;
-@group(0) @binding(11) var<storage, read> mesh_objects: array<u32>;
+@group(0) @binding(11) var object_map: texture_2d_array<u32>;
+@group(0) @binding(12) var<storage, read> mesh_objects: array<u32>;
 
 // v / |v| without overflow or underflow for any finite v (zero for zero):
 // scaled by its largest component first, so that the squares stay near 1.
@@ -38,9 +41,16 @@ fn unit(v: vec3<f32>) -> vec3<f32> {
     return w / length(w);
 }
 
-// k of Eq. 4.2 for the silhouette edge h0-h1 and the receiver p
-// (disk_fraction, Eq. 4.1, is in passes/shadow_test.wgsl).
-fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
+// The cutting plane of an edge through a receiver (4.2): its unit normal n,
+// pointing away from the occluder, and the signed distance s of the light's
+// centre from it towards the occluder (Eq. 4.1's s); n = 0 where p lies on
+// the edge's line.
+struct Cut {
+    n: vec3<f32>,
+    s: f32,
+};
+
+fn cutting_plane(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> Cut {
     let r = pvm.center.w;
     let l = pvm.center.xyz;
     // Cutting plane through h0, h1 and p (4.2). Silhouette edges are oriented
@@ -53,16 +63,174 @@ fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
     // 1/2 everywhere in the volumes of a scene scaled by 1e10).
     let m = cross(unit(h1 - h0), unit(p - h0));
     let len = length(m);
-    // p on the edge's line: the plane is undefined; half the light is the limit.
+    // p on the edge's line: the plane is undefined (s = 0: half the light, the limit).
     if (len <= 1e-7) {
-        return 0.5;
+        return Cut(vec3<f32>(0.0), 0.0);
     }
     let n = m / len;
     // Signed distance of the light centre from the plane, measured towards the
     // occluder: the visible part of the disk is the part beyond the plane from
     // an occluded centre, so Eq. 4.1 applies with this s.
-    let s = -(dot(n, l) - dot(n, h0));
-    return disk_fraction(s, r);
+    return Cut(n, -(dot(n, l) - dot(n, h0)));
+}
+
+// k of Eq. 4.2 for the silhouette edge h0-h1 and the receiver p
+// (disk_fraction, Eq. 4.1, is in passes/shadow_test.wgsl).
+fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
+    return disk_fraction(cutting_plane(p, h0, h1).s, pvm.center.w);
+}
+
+// The area of the circular segment {x : |x| <= 1, a.x >= c} of the unit
+// disk over pi (Eq. 4.1 in units of the radius: disk_fraction(c r, r)).
+fn segment_fraction(c: f32) -> f32 {
+    let t = clamp(c, -1.0, 1.0);
+    return clamp((acos(t) - t * sqrt(max(1.0 - t * t, 0.0))) / PI, 0.0, 1.0);
+}
+
+// The counter-clockwise angle from unit vector u to unit vector v, in [0, 2 pi).
+fn ccw_angle(u: vec2<f32>, v: vec2<f32>) -> f32 {
+    let a = atan2(u.x * v.y - u.y * v.x, dot(u, v));
+    return select(a, a + 2.0 * PI, a < 0.0);
+}
+
+// The fraction of the unit disk in both half-planes {a1.x >= c1} and
+// {a2.x >= c2} (a1, a2 unit). Where the two lines cross inside the disk
+// at X, the region is the triangle X P1 P2 and the circular segment beyond
+// P1 P2, Pi the end of line i's chord on the other half-plane's side;
+// otherwise the chords split the disk into three parts and the region is
+// one of them, the smaller segment, or empty.
+fn half_planes_fraction(a1: vec2<f32>, c1: f32, a2: vec2<f32>, c2: f32) -> f32 {
+    let k1 = segment_fraction(c1);
+    let k2 = segment_fraction(c2);
+    // A half-plane holding the whole disk (or none of it) leaves the other's fraction (or none).
+    if (c1 <= -1.0 || c2 >= 1.0) {
+        return select(k2, 0.0, c2 >= 1.0 || c1 >= 1.0);
+    }
+    if (c2 <= -1.0 || c1 >= 1.0) {
+        return select(k1, 0.0, c1 >= 1.0);
+    }
+    let det = a1.x * a2.y - a1.y * a2.x;
+    // |det| >= 1e-6: X within 1e6 of the centre, so |X| is finite; nearer
+    // parallel the lines cross (if at all) far outside the disk.
+    if (abs(det) >= 1e-6) {
+        let x = vec2<f32>(c1 * a2.y - c2 * a1.y, a1.x * c2 - a2.x * c1) / det;
+        if (dot(x, x) < 1.0) {
+            // Along line 1 towards half-plane 2, and along line 2 towards half-plane 1.
+            var d1 = vec2<f32>(-a1.y, a1.x);
+            d1 = select(d1, -d1, dot(a2, d1) < 0.0);
+            var d2 = vec2<f32>(-a2.y, a2.x);
+            d2 = select(d2, -d2, dot(a1, d2) < 0.0);
+            // |x| < 1: each root is real and positive.
+            let b1 = dot(x, d1);
+            let b2 = dot(x, d2);
+            let q = 1.0 - dot(x, x);
+            let p1 = x + d1 * (-b1 + sqrt(b1 * b1 + q));
+            let p2 = x + d2 * (-b2 + sqrt(b2 * b2 + q));
+            let twice = (p1.x - x.x) * (p2.y - x.y) - (p1.y - x.y) * (p2.x - x.x);
+            // The arc bounding the region runs from P1 to P2 the way X, P1, P2 turn.
+            let u1 = p1 / max(length(p1), 1e-20);
+            let u2 = p2 / max(length(p2), 1e-20);
+            let phi = select(ccw_angle(u2, u1), ccw_angle(u1, u2), twice >= 0.0);
+            return clamp((abs(twice) + phi - sin(phi)) / (2.0 * PI), 0.0, min(k1, k2));
+        }
+    }
+    // The chords do not cross in the disk: each lies wholly on one side of
+    // the other's line (its midpoint c a says which).
+    let one_in_two = dot(a2, c1 * a1) >= c2;
+    let two_in_one = dot(a1, c2 * a2) >= c1;
+    if (one_in_two && two_in_one) {
+        return max(k1 + k2 - 1.0, 0.0);
+    }
+    if (one_in_two) {
+        return k1;
+    }
+    if (two_in_one) {
+        return k2;
+    }
+    return 0.0;
+}
+
+// Beyond 4.2 (edges = "two", issue 28): the light that two silhouette
+// edges A and B leave a receiver p in both their penumbrae. Each edge's
+// cutting plane cuts the light's disk (seen from p) into a lit side of
+// Eq. 4.1's fraction k and an occluded side; one edge alone takes the
+// occluder for a half-plane, too dark where it is thinner than the light
+// and too light where a second caster also hides part of it.
+//   - A and B on one surface, each on the other's occluder side, with no
+//     occluder just past either (the shadow map): the occluder lies between
+//     them (a shadow thinner than the light, a convex corner) and hides
+//     what both hide; p sees the union of the lit sides.
+//   - A and B on two surfaces (two casters), each with occluder just inside
+//     it: the casters hide what either hides; p sees the intersection.
+//   - Otherwise A alone, as 4.2.
+fn two_edge_visibility(p: vec3<f32>, depth: f32, a: EdgePoints, b: EdgePoints) -> f32 {
+    let r = pvm.center.w;
+    let l = pvm.center.xyz;
+    let ca = cutting_plane(p, a.h0.xyz, a.h1.xyz);
+    let cb = cutting_plane(p, b.h0.xyz, b.h1.xyz);
+    let ka = disk_fraction(ca.s, r);
+    // h0.w: the edge's surface (its component, pvm/geometry.rs).
+    let two_casters = a.h0.w != b.h0.w;
+    var between = false;
+    if (two_casters) {
+        if (!covered(a, depth, -1.0) || !covered(b, depth, -1.0)) {
+            return ka;
+        }
+    } else {
+        between = on_occluder_side(a, b, l) && on_occluder_side(b, a, l) && !covered(a, depth, 1.0) && !covered(b, depth, 1.0);
+        if (!between) {
+            return ka;
+        }
+    }
+    // The light's disk as p sees it: perpendicular to w (unit(l - p) is
+    // non-zero: no surface touches the light), its lines the cutting planes'
+    // traces, the lit sides towards each n.
+    let w = unit(l - p);
+    let e1 = unit(cross(w, select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(w.x) > 0.7)));
+    let e2 = cross(w, e1);
+    let pa = vec2<f32>(dot(ca.n, e1), dot(ca.n, e2));
+    let pb = vec2<f32>(dot(cb.n, e1), dot(cb.n, e2));
+    // A cutting plane nearly parallel to w has no trace on the disk to speak
+    // of (n = 0 too where p lies on an edge's line): A alone decides.
+    if (dot(pa, pa) < 1e-6 || dot(pb, pb) < 1e-6) {
+        return ka;
+    }
+    // Offsets in units of r, as Eq. 4.1's (the traces' normals are within
+    // s/|l - p| of unit length).
+    let both = half_planes_fraction(normalize(pa), ca.s / r, normalize(pb), cb.s / r);
+    if (between) {
+        return clamp(ka + disk_fraction(cb.s, r) - both, 0.0, 1.0);
+    }
+    return both;
+}
+
+// How far past an edge `covered` looks, in radii of the light's disk as the
+// receiver sees it at the edge's depth: half of it.
+const PAST_EDGE: f32 = 0.5;
+
+// Whether the shadow map says an occluder nearer the light than the
+// receiver (at light depth `depth`) lies just past edge e's midpoint: on its
+// lit side for side = 1, its occluder side for side = -1. "Just past" is
+// PAST_EDGE of the light's disk seen from the receiver, at least 3 texels.
+fn covered(e: EdgePoints, depth: f32, side: f32) -> bool {
+    let mid = 0.5 * (e.h0.xyz + e.h1.xyz);
+    let out = hard_normal(e);
+    let d_e = light_view_depth(pvm.light_space, mid);
+    let seen = pvm.center.w * max(depth - d_e, 0.0) / max(depth, 1e-30);
+    let q = mid + side * out * max(3.0 * light_texel_size(pvm.light_space, d_e), PAST_EDGE * seen);
+    return map_depth(pvm, shadow_map, q) < depth;
+}
+
+// The unit normal of edge e's hard-shadow plane (through the edge and the
+// light's centre), away from its occluder: the orientation of silhouette.rs.
+// Edges pointing at the light have no volume, so the cross is non-zero.
+fn hard_normal(e: EdgePoints) -> vec3<f32> {
+    return unit(cross(unit(e.h1.xyz - e.h0.xyz), unit(e.h0.xyz - pvm.center.xyz)));
+}
+
+// Whether the midpoint of edge b lies on the occluder's side of edge a's hard-shadow plane.
+fn on_occluder_side(a: EdgePoints, b: EdgePoints, l: vec3<f32>) -> bool {
+    return dot(hard_normal(a), 0.5 * (b.h0.xyz + b.h1.xyz) - a.h0.xyz) < 0.0;
 }
 
 // How far (in k) a volume's visibility may disagree with the shadow-map test
@@ -106,7 +274,8 @@ fn shade(pixel: ScreenPixel) {
                 let t = map_texel(dims, m);
                 // The depth map and the index map are written together: a
                 // texel behind a volume holds an index (clamped all the same).
-                let edge = edges[min(max(textureLoad(edge_index, t, m.layer, 0).x, 1u) - 1u, arrayLength(&edges) - 1u)];
+                let index = min(max(textureLoad(edge_index, t, m.layer, 0).x, 1u) - 1u, arrayLength(&edges) - 1u);
+                let edge = edges[index];
                 var k = volume_visibility(p, edge.h0.xyz, edge.h1.xyz);
                 // Repair "centre" (beyond the paper): the volume nearest the
                 // light at this texel need not be the one that shadows p
@@ -117,6 +286,18 @@ fn shade(pixel: ScreenPixel) {
                 // otherwise, the volume belongs to another edge and the test
                 // decides alone.
                 let agrees = select(k <= 0.5 + CENTRE_TOLERANCE, k >= 0.5 - CENTRE_TOLERANCE, centre_lit);
+                if ((pvm.mode.y & 8u) != 0u && ((pvm.mode.y & 2u) == 0u || agrees) && k > 0.0 && k < 1.0) {
+                    // edges = "two": the volume farthest from the light at this
+                    // texel, where its edge is another and p in its penumbra too.
+                    let far = textureLoad(far_edge_index, t, m.layer, 0).x;
+                    if (far > 0u && min(far - 1u, arrayLength(&edges) - 1u) != index) {
+                        let other = edges[min(far - 1u, arrayLength(&edges) - 1u)];
+                        let kb = volume_visibility(p, other.h0.xyz, other.h1.xyz);
+                        if (kb > 0.0 && kb < 1.0) {
+                            k = two_edge_visibility(p, q.w, edge, other);
+                        }
+                    }
+                }
                 if ((pvm.mode.y & 2u) == 0u || agrees) {
                     if ((pvm.mode.y & 1u) != 0u) {
                         // Parker et al.'s sinusoidal falloff, as the Bernstein interpolant (4.2).
