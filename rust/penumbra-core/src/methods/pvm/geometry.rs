@@ -151,33 +151,6 @@ fn in_light_cone(v: DVec3, dir: DVec3, d: DVec3, l: DVec3, r: f64) -> DVec3 {
     (v - d).normalize_or_zero()
 }
 
-/// Per edge, the smallest index of the edges it is connected to through
-/// shared end points (edges with volumes only): its silhouette loop, or the
-/// chain of a loop that hidden edges break.
-fn silhouette_loops(edges: &[SilhouetteEdge], planes: &[Option<EdgePlanes>]) -> Vec<u32> {
-    fn root(parent: &mut [u32], mut i: u32) -> u32 {
-        while parent[i as usize] != i {
-            let up = parent[parent[i as usize] as usize];
-            parent[i as usize] = up;
-            i = up;
-        }
-        i
-    }
-    let mut parent: Vec<u32> = (0..edges.len() as u32).collect();
-    let mut first_at: HashMap<u32, u32> = HashMap::new();
-    for (i, e) in edges.iter().enumerate() {
-        if planes[i].is_none() {
-            continue;
-        }
-        for v in [e.ia, e.ib] {
-            let j = *first_at.entry(v).or_insert(i as u32);
-            let (a, b) = (root(&mut parent, i as u32), root(&mut parent, j));
-            parent[a.max(b) as usize] = a.min(b);
-        }
-    }
-    (0..edges.len() as u32).map(|i| root(&mut parent, i)).collect()
-}
-
 /// Builds the outer and inner quadrilaterals of every silhouette edge,
 /// extruded by `reach` (beyond the light's far plane). With `cone`, every
 /// extrusion vector lies in its vertex's light cone (`in_light_cone`);
@@ -205,7 +178,6 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, 
     junctions.dedup();
     stats.junction_vertices = junctions.len();
 
-    let loops = silhouette_loops(edges, &planes);
     let mut vertices = Vec::with_capacity(edges.len() * 12);
     let mut points = Vec::with_capacity(edges.len());
     let outside = std::cell::Cell::new(0usize);

@@ -128,12 +128,6 @@ impl MethodParams for PvmParams {
             // lower on every shared-mesh scene (tests/test_real_meshes.py) and
             // at the median over the generated suite (docs/methods/pvm.md).
             ParamSpec::bool("falloff", false, "the 3k^2 - 2k^3 interpolant of 4.2, the paper's (false: Eq. 4.1's disk fraction k)"),
-            // An option beyond 4.1.3, whose volume map is the shadow map's size
-            // (issue 30). Not the default: the map picks one edge per texel,
-            // and a texel per pixel picks the wrong one where the penumbra is
-            // a few pixels wide (the teapot close under r = 0.3: penumbra RMSE
-            // 0.045 against 0.033, tests/test_real_meshes.py), though over
-            // the 40 generated scenes the median is 0.1341 against 0.1339.
             // An option beyond 4.1.3 (issue 28), whose map keeps one edge per
             // texel: where two edges' penumbrae overlap (a shadow thinner than
             // the light's, two casters), one edge's disk fraction is wrong.
@@ -143,6 +137,12 @@ impl MethodParams for PvmParams {
                 &["one", "two"],
                 "edges per volume-map texel: one, the volume nearest the light (4.1.3); two, also the farthest, combined where a pixel lies in both penumbrae",
             ),
+            // An option beyond 4.1.3, whose volume map is the shadow map's size
+            // (issue 30). Not the default: the map picks one edge per texel,
+            // and a texel per pixel picks the wrong one where the penumbra is
+            // a few pixels wide (the teapot close under r = 0.3: penumbra RMSE
+            // 0.045 against 0.033, tests/test_real_meshes.py), though over
+            // the 40 generated scenes the median is 0.1341 against 0.1339.
             ParamSpec::choice(
                 "volume_map_size",
                 "map",
