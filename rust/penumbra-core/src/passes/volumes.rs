@@ -21,53 +21,27 @@ pub struct VolumePass {
 
 /// What a [`VolumePass`] keeps per texel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Keep {
-    /// The volume nearest the light, in a depth map ([`VolumePass::new`]).
+pub enum Keep {
+    /// The volume nearest the light, in a depth map.
     Nearest,
-    /// The volume farthest from the light, in a depth map ([`VolumePass::new_farthest`]).
+    /// The volume farthest from the light, in a depth map (cleared to 0 and
+    /// tested `Greater`).
     Farthest,
-    /// Without depth, the largest value each colour target receives ([`VolumePass::new_max`]).
+    /// Without a depth map: every volume's fragments reach the colour
+    /// targets, which keep the largest value each texel receives (blend
+    /// `Max`; the targets' formats must be blendable, and they are cleared
+    /// to zero). [`VolumePass::record_uploaded`] records it.
     Max,
 }
 
 impl VolumePass {
-    /// `name` labels the pass (`pvm::volume`); `source` holds the vertex and
-    /// fragment entry points `(vs, fs)`, which read the light's
-    /// `ShadowUniforms` at binding 0; each vertex is a `V` with `attributes`;
-    /// one colour target per format.
+    /// A pass that keeps `keep` per texel. `name` labels the pass
+    /// (`pvm::volume`); `source` holds the vertex and fragment entry points
+    /// `(vs, fs)`, which read the light's `ShadowUniforms` at binding 0; each
+    /// vertex is a `V` with `attributes`; one colour target per format.
+    #[allow(clippy::too_many_arguments)]
     pub fn new<V>(
-        device: &wgpu::Device,
-        pool: &ResourcePool,
-        name: &'static str,
-        source: String,
-        entry_points: (&str, &str),
-        attributes: &[wgpu::VertexAttribute],
-        targets: &[wgpu::TextureFormat],
-    ) -> Self {
-        let targets: Vec<_> = targets.iter().map(|&f| Some(f.into())).collect();
-        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, Keep::Nearest)
-    }
-
-    /// As [`Self::new`], keeping the volume farthest from the light (its
-    /// depth map cleared to 0 and tested `Greater`).
-    pub fn new_farthest<V>(
-        device: &wgpu::Device,
-        pool: &ResourcePool,
-        name: &'static str,
-        source: String,
-        entry_points: (&str, &str),
-        attributes: &[wgpu::VertexAttribute],
-        targets: &[wgpu::TextureFormat],
-    ) -> Self {
-        let targets: Vec<_> = targets.iter().map(|&f| Some(f.into())).collect();
-        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, Keep::Farthest)
-    }
-
-    /// As [`Self::new`], but without a depth map: every volume's fragments
-    /// reach the colour targets, which keep the largest value each texel
-    /// receives (blend `Max`; the targets' formats must be blendable, and
-    /// they are cleared to zero). [`Self::record_uploaded`] records it.
-    pub fn new_max<V>(
+        keep: Keep,
         device: &wgpu::Device,
         pool: &ResourcePool,
         name: &'static str,
@@ -77,9 +51,9 @@ impl VolumePass {
         targets: &[wgpu::TextureFormat],
     ) -> Self {
         let max = wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Max };
-        let blend = Some(wgpu::BlendState { color: max, alpha: max });
+        let blend = (keep == Keep::Max).then_some(wgpu::BlendState { color: max, alpha: max });
         let targets: Vec<_> = targets.iter().map(|&format| Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL })).collect();
-        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, Keep::Max)
+        Self::build::<V>(device, pool, name, source, entry_points, attributes, &targets, keep)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -129,12 +103,12 @@ impl VolumePass {
     ) -> Result<PooledTexture> {
         let vertices = self.upload(ctx, vertices)?;
         let depth = self.record_uploaded(ctx, encoder, projection, &vertices, map_size, targets, timestamps);
-        Ok(depth.expect("a depth pass (VolumePass::new) returns its depth map"))
+        Ok(depth.expect("a depth pass (Keep::Nearest or Farthest) returns its depth map"))
     }
 
     /// As [`Self::record`], for vertices already on the GPU ([`Self::upload`];
     /// another pass's, with the same vertex layout, will do): the depth map
-    /// of a [`Self::new`] pass, or `None` for a [`Self::new_max`] pass, which
+    /// of a depth pass, or `None` for a [`Keep::Max`] pass, which
     /// draws into its colour `targets` alone.
     #[allow(clippy::too_many_arguments)]
     pub fn record_uploaded(
@@ -190,7 +164,7 @@ impl VolumePass {
                 }
             }
         });
-        depth.expect("a depth pass (VolumePass::new) returns its depth map")
+        depth.expect("a depth pass (Keep::Nearest or Farthest) returns its depth map")
     }
 
     #[allow(clippy::too_many_arguments)]

@@ -31,7 +31,7 @@ use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shadow_test::ShadowMapSettings;
-use crate::passes::volumes::VolumePass;
+use crate::passes::volumes::{Keep, VolumePass};
 pub use crate::silhouettes::{silhouette, OpenEdges, Repairs, SilhouetteCache, SilhouetteEdge};
 
 pub mod geometry;
@@ -181,24 +181,12 @@ impl Method for PenumbraVolumeMaps {
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
-        let volume_pass = VolumePass::new::<VolumeVertex>(
-            device,
-            pool,
-            "pvm::volume_pass",
-            crate::shaders::compose("passes/light_ids.wgsl"),
-            ("vs_main", "fs_main"),
-            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
-            &[EDGE_INDEX_FORMAT],
-        );
-        let far_volume_pass = VolumePass::new_farthest::<VolumeVertex>(
-            device,
-            pool,
-            "pvm::far_volume_pass",
-            crate::shaders::compose("passes/light_ids.wgsl"),
-            ("vs_main", "fs_main"),
-            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
-            &[EDGE_INDEX_FORMAT],
-        );
+        // The volume map (4.1.3), and with edges = "two" the same volumes' farthest.
+        let volumes = |keep, name| {
+            let source = crate::shaders::compose("passes/light_ids.wgsl");
+            VolumePass::new::<VolumeVertex>(keep, device, pool, name, source, ("vs_main", "fs_main"), &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32], &[EDGE_INDEX_FORMAT])
+        };
+        let (volume_pass, far_volume_pass) = (volumes(Keep::Nearest, "pvm::volume_pass"), volumes(Keep::Farthest, "pvm::far_volume_pass"));
         // Reads the map, the volume map's depth and edge indices, the edges and
         // the test block; writes visibility, membership and the counter; reads
         // the far edge indices.
@@ -303,7 +291,7 @@ impl PenumbraVolumeMaps {
             ctx.queue.write_buffer(&edges, 0, bytes);
             let vertices = self.volume_pass.upload(ctx, &geometry.vertices)?;
             let depth = self.volume_pass.record_uploaded(ctx, encoder, projection, &vertices, map, &[&edge_index], ts);
-            let depth = depth.expect("a depth pass (VolumePass::new) returns its depth map");
+            let depth = depth.expect("a depth pass (Keep::Nearest) returns its depth map");
             Ok((depth, vertices, edges, geometry.stats, cache_hits))
         })??;
         // edges = "two": the same volumes again, the farthest kept (its own pass, timed apart).

@@ -41,7 +41,7 @@ use crate::passes::object_map::{self, OBJECT_MAP};
 use crate::passes::samplers::{ComparisonSamplers, Filter};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shadow_test::{ShadowMapSettings, ShadowTestUniform};
-use crate::passes::volumes::VolumePass;
+use crate::passes::volumes::{Keep, VolumePass};
 use crate::silhouettes::{OpenEdges, Repairs};
 
 pub mod geometry;
@@ -358,10 +358,10 @@ impl Method for PenumbraVolumeMaskFiltering {
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32];
         let source = crate::shader!("mask.wgsl");
-        let mask_pass = VolumePass::new::<MaskVertex>(device, pool, "pvmf::mask_pass", source.clone(), ("vs_mask", "fs_mask"), &attributes, &[DISTANCE_FORMAT]);
+        let mask_pass = VolumePass::new::<MaskVertex>(Keep::Nearest, device, pool, "pvmf::mask_pass", source.clone(), ("vs_mask", "fs_mask"), &attributes, &[DISTANCE_FORMAT]);
         // The same volumes, every one kept (occluder_distance "farthest_edge").
         let farthest_pass =
-            VolumePass::new_max::<MaskVertex>(device, pool, "pvmf::farthest_pass", source, ("vs_mask", "fs_mask_far"), &attributes, &[FARTHEST_FORMAT]);
+            VolumePass::new::<MaskVertex>(Keep::Max, device, pool, "pvmf::farthest_pass", source, ("vs_mask", "fs_mask_far"), &attributes, &[FARTHEST_FORMAT]);
         let storage = layout::visibility_storage;
         // Reads the map, the mask's depth and d_e, the test and settings blocks;
         // writes the raw estimate, the blur mask, the filter width and the counters.
@@ -488,7 +488,7 @@ impl PenumbraVolumeMaskFiltering {
             let mask_projection = projection.with_near(projection.far() * 1e-4);
             let vertices = self.mask_pass.upload(ctx, &vertices)?;
             let depth = self.mask_pass.record_uploaded(ctx, encoder, &mask_projection, &vertices, map, &[&edge_distance], ts);
-            let depth = depth.expect("the mask pass (VolumePass::new) returns its depth map");
+            let depth = depth.expect("the mask pass (Keep::Nearest) returns its depth map");
             Ok((depth, stats, cache_hits, vertices))
         })??;
         // The same volumes again, without the depth test (its own pass, timed apart).
