@@ -90,14 +90,19 @@ def test_two_edges_light_a_shadow_thinner_than_the_light(renderer: penumbra.Rend
     assert one > 0.04 and two < 0.02 and two < 0.3 * one, (one, two)
 
 
-def test_two_edges_darken_where_two_casters_overlap(renderer: penumbra.Renderer) -> None:
+def test_two_edges_of_two_casters_keep_the_nearest_edge(renderer: penumbra.Renderer) -> None:
     """A bar at height 2.5 and another at 1.2 beside it in light space: on
     the ground between their hard shadows, in both penumbrae, one edge sees
-    one caster and misses the other (measured RMSE 0.27 there, 0.107 over
-    the penumbra); two edges on two surfaces leave the intersection of
-    their lit sides (0.029 there, 0.057 over the penumbra)."""
-    one, two, one_changed, two_changed = penumbra_errors(renderer, bars_scene((2.5, -0.55, 0.9), (1.2, 0.55, 0.9)))
-    assert two < 0.7 * one and two_changed < 0.05 and one_changed > 0.2, (one, two, one_changed, two_changed)
+    one caster and misses the other (measured penumbra RMSE 0.27 there,
+    0.107 over the penumbra). edges="two" leaves two surfaces' edges to 4.2's
+    nearest edge: taking them for two half-planes (the intersection of their
+    lit sides) fixed this scene (0.029 there) but made thin parts of
+    separate surfaces far too dark (an aeroplane's wings on the generated
+    slow suite's seed 85: 0.156 -> 0.243), so the image is the same."""
+    scene = bars_scene((2.5, -0.55, 0.9), (1.2, 0.55, 0.9))
+    one = renderer.render(scene, "pvm").visibility
+    two = renderer.render(scene, "pvm", edges="two").visibility
+    np.testing.assert_array_equal(one, two)
 
 
 def test_pvm_beats_hard_against_ground_truth_on_every_builtin_scene(renderer: penumbra.Renderer, tmp_path_factory: pytest.TempPathFactory) -> None:
