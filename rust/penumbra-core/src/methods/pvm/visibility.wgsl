@@ -80,13 +80,6 @@ fn volume_visibility(p: vec3<f32>, h0: vec3<f32>, h1: vec3<f32>) -> f32 {
     return disk_fraction(cutting_plane(p, h0, h1).s, pvm.center.w);
 }
 
-// The area of the circular segment {x : |x| <= 1, a.x >= c} of the unit
-// disk over pi (Eq. 4.1 in units of the radius: disk_fraction(c r, r)).
-fn segment_fraction(c: f32) -> f32 {
-    let t = clamp(c, -1.0, 1.0);
-    return clamp((acos(t) - t * sqrt(max(1.0 - t * t, 0.0))) / PI, 0.0, 1.0);
-}
-
 // The counter-clockwise angle from unit vector u to unit vector v, in [0, 2 pi).
 fn ccw_angle(u: vec2<f32>, v: vec2<f32>) -> f32 {
     let a = atan2(u.x * v.y - u.y * v.x, dot(u, v));
@@ -100,8 +93,9 @@ fn ccw_angle(u: vec2<f32>, v: vec2<f32>) -> f32 {
 // otherwise the chords split the disk into three parts and the region is
 // one of them, the smaller segment, or empty.
 fn half_planes_fraction(a1: vec2<f32>, c1: f32, a2: vec2<f32>, c2: f32) -> f32 {
-    let k1 = segment_fraction(c1);
-    let k2 = segment_fraction(c2);
+    // Each half-plane's own fraction: Eq. 4.1 in units of the radius.
+    let k1 = disk_fraction(c1, 1.0);
+    let k2 = disk_fraction(c2, 1.0);
     // A half-plane holding the whole disk (or none of it) leaves the other's fraction (or none).
     if (c1 <= -1.0 || c2 >= 1.0) {
         return select(k2, 0.0, c2 >= 1.0 || c1 >= 1.0);
