@@ -78,8 +78,10 @@ KNOWN: dict[tuple[str, str, str], float] = {
 # raytraced), at 256 none.
 PARAMS: dict[str, dict[str, Any]] = {"reference": {"n_samples": 16}, "raytraced": {"n_samples": 16}, "triangle_masks": {"n_samples": 16}}
 MIRRORED_SAMPLES = 256
-# Options that read topology beyond the defaults, checked as methods of their own.
-VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {"pvm-edges-two": ("pvm", {"edges": "two"})}
+# Settings that read topology otherwise than the defaults, checked as methods
+# of their own: pvm as 4.1.3 and 4.2 build it (one edge per texel of a
+# map-sized volume map, read at the pixel's texel), its default before issue 28.
+VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {"pvm-one-edge": ("pvm", {"edges": "one", "volume_map_size": "map", "lookup": "texel"})}
 
 
 def _cases() -> list[Any]:

@@ -106,9 +106,10 @@ SIZE = 160
 GT_SPP = 1024
 ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts" / "real_meshes"
 CONFIGS: dict[str, tuple[str, dict[str, Any]]] = {
-    "pvm": ("pvm", {}),  # Eq. 4.1's disk fraction, the default since issue 28
-    "pvm-paper": ("pvm", PAPER["pvm"]),  # with 4.2's 3k^2 - 2k^3, the default before
-    "pvm-two-edges": ("pvm", {"edges": "two"}),  # the option (docs/methods/pvm.md)
+    "pvm": ("pvm", {}),  # its defaults since issue 28 (docs/methods/pvm.md)
+    "pvm-paper": ("pvm", PAPER["pvm"]),  # 4.1.3 and 4.2 as the paper builds them
+    # The paper's but Eq. 4.1's k: the default before edges="two", volume_map_size="auto", lookup="3x3".
+    "pvm-one-edge": ("pvm", {"edges": "one", "volume_map_size": "map", "lookup": "texel"}),
     "pvmf": ("pvmf", {}),  # its defaults, the settings docs/real_meshes.md once recommended over the paper's
 }
 
@@ -117,18 +118,19 @@ CONFIGS: dict[str, tuple[str, dict[str, Any]]] = {
 # scene and configuration; each test allows it 15% and 0.005 more. pvmf's
 # since occluder_distance="darker" became its default (issue 28; the
 # benchmark's row "occluder_distance=nearest_volume" has the values before);
-# pvm's since falloff=False became its default (issue 28; the row
-# "falloff=True" is pvm-paper).
+# pvm's since edges="two", volume_map_size="auto" and lookup="3x3" became its
+# defaults (issue 28; the row "edges=one lookup=texel volume_map_size=map" is
+# pvm-one-edge, the row "falloff=True edges=one ..." pvm-paper).
 MEASURED: dict[str, dict[str, float]] = {
-    "cube.obj close r=0.3": {"pvm": 0.0154, "pvm-paper": 0.0425, "pvm-two-edges": 0.0131, "pvmf": 0.0173},
-    "cube.obj close r=0.8": {"pvm": 0.0523, "pvm-paper": 0.0681, "pvm-two-edges": 0.0496, "pvmf": 0.0430},
-    "cube.obj wide_floor r=0.3": {"pvm": 0.0381, "pvm-paper": 0.0781, "pvm-two-edges": 0.0300, "pvmf": 0.0406},
-    "spot.obj close r=0.3": {"pvm": 0.0768, "pvm-paper": 0.1002, "pvm-two-edges": 0.0766, "pvmf": 0.0396},
-    "spot.obj close r=0.8": {"pvm": 0.0971, "pvm-paper": 0.1124, "pvm-two-edges": 0.0962, "pvmf": 0.0479},
-    "spot.obj wide_floor r=0.3": {"pvm": 0.0875, "pvm-paper": 0.1019, "pvm-two-edges": 0.0878, "pvmf": 0.0491},
-    "teapot-mcguire-closed.obj close r=0.3": {"pvm": 0.0243, "pvm-paper": 0.0655, "pvm-two-edges": 0.0243, "pvmf": 0.0279},
-    "teapot-mcguire-closed.obj close r=0.8": {"pvm": 0.0912, "pvm-paper": 0.1095, "pvm-two-edges": 0.0893, "pvmf": 0.0522},
-    "teapot-mcguire-closed.obj wide_floor r=0.3": {"pvm": 0.0782, "pvm-paper": 0.1031, "pvm-two-edges": 0.0779, "pvmf": 0.0364},
+    "cube.obj close r=0.3": {"pvm": 0.0121, "pvm-paper": 0.0425, "pvm-one-edge": 0.0154, "pvmf": 0.0173},
+    "cube.obj close r=0.8": {"pvm": 0.0499, "pvm-paper": 0.0681, "pvm-one-edge": 0.0523, "pvmf": 0.0430},
+    "cube.obj wide_floor r=0.3": {"pvm": 0.0289, "pvm-paper": 0.0781, "pvm-one-edge": 0.0381, "pvmf": 0.0406},
+    "spot.obj close r=0.3": {"pvm": 0.0655, "pvm-paper": 0.1002, "pvm-one-edge": 0.0713, "pvmf": 0.0396},
+    "spot.obj close r=0.8": {"pvm": 0.0889, "pvm-paper": 0.1124, "pvm-one-edge": 0.0964, "pvmf": 0.0479},
+    "spot.obj wide_floor r=0.3": {"pvm": 0.0853, "pvm-paper": 0.1019, "pvm-one-edge": 0.0875, "pvmf": 0.0491},
+    "teapot-mcguire-closed.obj close r=0.3": {"pvm": 0.0225, "pvm-paper": 0.0655, "pvm-one-edge": 0.0243, "pvmf": 0.0279},
+    "teapot-mcguire-closed.obj close r=0.8": {"pvm": 0.0835, "pvm-paper": 0.1095, "pvm-one-edge": 0.0860, "pvmf": 0.0522},
+    "teapot-mcguire-closed.obj wide_floor r=0.3": {"pvm": 0.0782, "pvm-paper": 0.1031, "pvm-one-edge": 0.0782, "pvmf": 0.0364},
 }
 # Issue 15's targets, which every scene meets (the benchmark's targets table):
 # penumbra RMSE at most half of hard's; stray pixels under 0.5%; pvmf's

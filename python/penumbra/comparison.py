@@ -92,8 +92,10 @@ PAPER: dict[str, dict[str, Any]] = {
     "pvmf": {"kernel": "square", "n_blur": 12, "offsets": "unit", "umbra": "filter", "s_e": 0.5, "mask_size": "map", "occluder_distance": "nearest_volume"},
     # Fernando 2005: the plane test, uniform search taps, the mean blocker
     # depth, and the centre's test alone (no horizon repair).
-    # Cournia 4.2: the 3k^2 - 2k^3 interpolant of the disk fraction.
-    "pvm": {"falloff": True},
+    # Cournia 4.1.3 and 4.2: one edge per texel of a map-sized volume map,
+    # read at the pixel's texel, and the 3k^2 - 2k^3 interpolant of the
+    # disk fraction.
+    "pvm": {"falloff": True, "edges": "one", "volume_map_size": "map", "lookup": "texel"},
     "pcss": {"blocker_test": "plane", "search": "uniform", "blocker_depth": "mean", "horizon": False},
 }
 

@@ -74,6 +74,10 @@ pub struct PvmParams {
     /// and a pixel inside both edges' penumbrae takes the light the two
     /// edges leave it together (`two_edge_visibility` in visibility.wgsl).
     pub two_edges: bool,
+    /// `lookup = "3x3"` (beyond 4.2, which reads the texel under the pixel):
+    /// where that texel's volume does not hold the pixel, the neighbour
+    /// texels' volumes may (`volume_at` in visibility.wgsl).
+    pub lookup_neighbours: bool,
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`).
     pub repairs: Repairs,
@@ -128,26 +132,38 @@ impl MethodParams for PvmParams {
             // lower on every shared-mesh scene (tests/test_real_meshes.py) and
             // at the median over the generated suite (docs/methods/pvm.md).
             ParamSpec::bool("falloff", false, "the 3k^2 - 2k^3 interpolant of 4.2, the paper's (false: Eq. 4.1's disk fraction k)"),
-            // An option beyond 4.1.3 (issue 28), whose map keeps one edge per
-            // texel: where two edges' penumbrae overlap (a shadow thinner than
-            // the light's, two casters), one edge's disk fraction is wrong.
+            // Beyond 4.1.3 (issue 28), whose map keeps one edge per texel:
+            // where two edges' penumbrae overlap (a shadow thinner than the
+            // light's, a convex corner), one edge's disk fraction is wrong.
+            // The default since, with "auto" and "3x3" below, it lowered the
+            // penumbra RMSE on 34 of the 40 generated scenes and 53 of the
+            // slow suite's 60 (docs/methods/pvm.md).
             ParamSpec::choice(
                 "edges",
-                "one",
+                "two",
                 &["one", "two"],
                 "edges per volume-map texel: one, the volume nearest the light (4.1.3); two, also the farthest, combined where a pixel lies in both penumbrae",
             ),
-            // An option beyond 4.1.3, whose volume map is the shadow map's size
-            // (issue 30). Not the default: the map picks one edge per texel,
-            // and a texel per pixel picks the wrong one where the penumbra is
-            // a few pixels wide (the teapot close under r = 0.3: penumbra RMSE
-            // 0.045 against 0.033, tests/test_real_meshes.py), though over
-            // the 40 generated scenes the median is 0.1341 against 0.1339.
+            // Beyond 4.1.3, whose volume map is the shadow map's size (issue
+            // 30): the volume passes' cost is their texels. Alone, a texel
+            // per pixel misses penumbrae narrower than a texel (the teapot
+            // close under r = 0.3: 0.039 against 0.024 with edges "two");
+            // with lookup "3x3" it is 0.0225.
             ParamSpec::choice(
                 "volume_map_size",
-                "map",
+                "auto",
                 &["map", "auto"],
                 "the penumbra volume map's resolution: the shadow map's (4.1.3), or auto: a texel per pixel on the visible receivers (map_size's criterion), at most the map's",
+            ),
+            // Beyond 4.2 (issue 28): the volume map is a rasterisation at
+            // texel centres, so a penumbra narrower than a texel falls
+            // between them and its pixels get the hard test; and the volume
+            // at a pixel's texel need not be one whose penumbra holds it.
+            ParamSpec::choice(
+                "lookup",
+                "3x3",
+                &["texel", "3x3"],
+                "where the visibility pass looks up the volume holding a pixel: its texel (4.2), or 3x3: also the 8 neighbours where that texel's volume does not hold it",
             ),
             OpenEdges::spec(),
             ParamSpec::choice(
@@ -165,6 +181,7 @@ impl MethodParams for PvmParams {
             falloff: p.bool("falloff"),
             volume_map_auto: p.choice("volume_map_size") == "auto",
             two_edges: p.choice("edges") == "two",
+            lookup_neighbours: p.choice("lookup") == "3x3",
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
         })
@@ -227,7 +244,8 @@ impl Method for PenumbraVolumeMaps {
             let flags = u32::from(params.falloff)
                 | (u32::from(params.repairs.centre) << 1)
                 | (u32::from(params.repairs.horizon) << 2)
-                | (u32::from(volumes.far_edge_index.is_some()) << 3);
+                | (u32::from(volumes.far_edge_index.is_some()) << 3)
+                | (u32::from(params.lookup_neighbours) << 4);
             let uniforms = ctx.parameters(
                 "pvm::visibility_uniforms",
                 &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags),

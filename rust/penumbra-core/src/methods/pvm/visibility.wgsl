@@ -19,7 +19,7 @@ struct EdgePoints {
 };
 @group(0) @binding(5) var<storage, read> edges: array<EdgePoints>;
 // mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon";
-// bit 3: edges = "two" (the far edge map below is read).
+// bit 3: edges = "two" (the far edge map below is read); bit 4: lookup = "3x3".
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
@@ -223,6 +223,54 @@ fn on_occluder_side(a: EdgePoints, b: EdgePoints, l: vec3<f32>) -> bool {
 // two of the hard-shadow boundary they disagree by design.
 const CENTRE_TOLERANCE: f32 = 0.1;
 
+// Whether edge e's k for receiver p (light depth `depth`) agrees with the
+// shadow map's test at the light's centre (repair "centre"): within
+// CENTRE_TOLERANCE, or p within the band where the map's raster and its
+// normal offset move the hard-shadow boundary: 2 texels and the offset at
+// p's depth from e's hard-shadow plane. Under a penumbra a few texels wide
+// k crosses from 0 to 1 within that band, and a tolerance in k alone
+// rejects the right edge (a bar under a light of radius 0.05 on a 256
+// map: every penumbra pixel given the hard test).
+fn agrees_with_centre(k: f32, centre_lit: bool, p: vec3<f32>, e: EdgePoints, depth: f32) -> bool {
+    if (select(k <= 0.5 + CENTRE_TOLERANCE, k >= 0.5 - CENTRE_TOLERANCE, centre_lit)) {
+        return true;
+    }
+    let band = (2.0 + max(pvm.bias.x, 0.0)) * light_texel_size(pvm.light_space, depth);
+    return abs(dot(hard_normal(e), p - e.h0.xyz)) <= band;
+}
+
+// What the volume map holds at one texel for receiver p (light depth
+// `depth`): whether a volume there is nearer the light than p (listing 4.2),
+// whether that edge's penumbra holds p (0 < k < 1) with k agreeing with the
+// shadow map's test at the light's centre where repair "centre" asks it,
+// whether k agrees so, the edge's index, Eq. 4.1's k for p and the volume's depth.
+struct VolumeHit {
+    inside: bool,
+    holds: bool,
+    agrees: bool,
+    index: u32,
+    k: f32,
+    depth: f32,
+};
+
+fn volume_at(p: vec3<f32>, depth: f32, t: vec2<i32>, layer: i32, centre_lit: bool) -> VolumeHit {
+    var d = pvm.light_space.depth.y;
+    if (layer_active(pvm.light_space, layer)) {
+        d = textureLoad(volume_depth, t, layer, 0) * pvm.light_space.depth.y;
+    }
+    if (!(d < depth)) {
+        return VolumeHit(false, false, false, 0u, 0.0, d);
+    }
+    // The depth map and the index map are written together: a texel
+    // behind a volume holds an index (clamped all the same).
+    let index = min(max(textureLoad(edge_index, t, layer, 0).x, 1u) - 1u, arrayLength(&edges) - 1u);
+    let edge = edges[index];
+    let k = volume_visibility(p, edge.h0.xyz, edge.h1.xyz);
+    let agrees = agrees_with_centre(k, centre_lit, p, edge, depth);
+    let holds = k > 0.0 && k < 1.0 && ((pvm.mode.y & 2u) == 0u || agrees);
+    return VolumeHit(true, holds, agrees, index, k, d);
+}
+
 // Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
 fn shade(pixel: ScreenPixel) {
     let px = pixel.px;
@@ -252,24 +300,36 @@ fn shade(pixel: ScreenPixel) {
             let centre_lit = q.w <= map_depth(pvm, shadow_map, q.xyz);
             v = select(0.0, 1.0, centre_lit);
             // Listing 4.2: in a volume when the PVDM is nearer the light than the pixel.
-            if (image_depth(pvm, volume_depth, q.xyz) < q.w) {
-                let dims = textureDimensions(edge_index);
-                let m = map_point_in(pvm.light_space, light_map_point(pvm.light_space, q.xyz), dims);
-                let t = map_texel(dims, m);
-                // The depth map and the index map are written together: a
-                // texel behind a volume holds an index (clamped all the same).
-                let index = min(max(textureLoad(edge_index, t, m.layer, 0).x, 1u) - 1u, arrayLength(&edges) - 1u);
+            let dims = textureDimensions(edge_index);
+            let m = map_point_in(pvm.light_space, light_map_point(pvm.light_space, q.xyz), dims);
+            var t = map_texel(dims, m);
+            var hit = volume_at(p, q.w, t, m.layer, centre_lit);
+            // lookup = "3x3" (beyond 4.2): where p's own texel holds no
+            // volume whose edge's penumbra holds p, the volume map (a
+            // rasterisation at texel centres) may have missed one narrower
+            // than a texel; the neighbour texels' volumes nearest the light
+            // whose penumbra holds p decide instead.
+            if ((pvm.mode.y & 16u) != 0u && !hit.holds) {
+                var best = VolumeHit(false, false, false, 0u, 0.0, q.w);
+                for (var dy = -1; dy <= 1; dy++) {
+                    for (var dx = -1; dx <= 1; dx++) {
+                        let n = clamp(t + vec2<i32>(dx, dy), vec2<i32>(0), vec2<i32>(dims) - 1);
+                        let h = volume_at(p, q.w, n, m.layer, centre_lit);
+                        if (h.holds && h.depth < best.depth) {
+                            best = h;
+                            t = n;
+                        }
+                    }
+                }
+                if (best.holds) {
+                    hit = best;
+                }
+            }
+            if (hit.inside) {
+                let index = hit.index;
                 let edge = edges[index];
-                var k = volume_visibility(p, edge.h0.xyz, edge.h1.xyz);
-                // Repair "centre" (beyond the paper): the volume nearest the
-                // light at this texel need not be the one that shadows p
-                // (4.3's overlap): a far edge's inner volume reaching past the
-                // occluder's other side, or another edge's volume over an
-                // umbra. k >= 1/2 means the centre is visible and k < 1/2 that
-                // it is hidden; where the shadow map's test at the centre says
-                // otherwise, the volume belongs to another edge and the test
-                // decides alone.
-                let agrees = select(k <= 0.5 + CENTRE_TOLERANCE, k >= 0.5 - CENTRE_TOLERANCE, centre_lit);
+                var k = hit.k;
+                let agrees = hit.agrees;
                 if ((pvm.mode.y & 8u) != 0u && ((pvm.mode.y & 2u) == 0u || agrees) && k > 0.0 && k < 1.0) {
                     // edges = "two": the volume farthest from the light at this
                     // texel, where its edge is another, lies between the light
