@@ -81,7 +81,7 @@ MIRRORED_SAMPLES = 256
 # Settings that read topology otherwise than the defaults, checked as methods
 # of their own: pvm as 4.1.3 and 4.2 build it (one edge per texel of a
 # map-sized volume map, read at the pixel's texel), its default before issue 28.
-VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {"pvm-one-edge": ("pvm", {"edges": "one", "volume_map_size": "map", "lookup": "texel"})}
+VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {"pvm-one-edge": ("pvm", {"edges": "one", "volume_map_size": "map", "lookup": "texel", "umbra_test": "none"})}
 
 
 def _cases() -> list[Any]:

@@ -109,7 +109,7 @@ CONFIGS: dict[str, tuple[str, dict[str, Any]]] = {
     "pvm": ("pvm", {}),  # its defaults since issue 28 (docs/methods/pvm.md)
     "pvm-paper": ("pvm", PAPER["pvm"]),  # 4.1.3 and 4.2 as the paper builds them
     # The paper's but Eq. 4.1's k: the default before edges="two", volume_map_size="auto", lookup="3x3".
-    "pvm-one-edge": ("pvm", {"edges": "one", "volume_map_size": "map", "lookup": "texel"}),
+    "pvm-one-edge": ("pvm", {"edges": "one", "volume_map_size": "map", "lookup": "texel", "umbra_test": "none"}),
     "pvmf": ("pvmf", {}),  # its defaults, the settings docs/real_meshes.md once recommended over the paper's
 }
 

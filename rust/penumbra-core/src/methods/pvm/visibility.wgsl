@@ -19,7 +19,8 @@ struct EdgePoints {
 };
 @group(0) @binding(5) var<storage, read> edges: array<EdgePoints>;
 // mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon";
-// bit 3: edges = "two" (the far edge map below is read); bit 4: lookup = "3x3".
+// bit 3: edges = "two" (the far edge map below is read); bit 4: lookup = "3x3";
+// bit 5: umbra_test = "rim".
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
@@ -271,6 +272,60 @@ fn volume_at(p: vec3<f32>, depth: f32, t: vec2<i32>, layer: i32, centre_lit: boo
     return VolumeHit(true, holds, agrees, index, k, d);
 }
 
+// umbra_test = "rim" (beyond 4.2): whether the light's rim is hidden from
+// p (at light depth `depth`) as its centre is (by a surface at light depth
+// d_s, the shadow map's at p's texel). For each of 8 points of the rim,
+// the ray from p towards it is followed against the map: at the light
+// depth d of the last surface found (d_s first), the map's texel under the
+// ray's point holds the first surface m on the centre's ray there; the ray
+// is hidden where m lies within 2 texels of d (the surface is on it), and
+// seen where m lies beyond p; else d = m, at most 16 times (then taken for
+// seen). 4.2 takes the nearest volume's edge for a half-plane and leaves p
+// the light on its lit side; where another part hides that side too (a
+// teapot's knob over its body: the body's umbra lit to 1/2), p is in the umbra.
+fn rim_hidden(p: vec3<f32>, depth: f32, d_s: f32) -> bool {
+    let l = pvm.center.xyz;
+    let r = pvm.center.w;
+    // unit(l - p) is non-zero: no receiver touches the light.
+    let w = unit(l - p);
+    let e1 = unit(cross(w, select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(w.x) > 0.7)));
+    let e2 = cross(w, e1);
+    // The map resolves the rim only where the light, seen from p, spans
+    // more than 2 of its texels at d_s (the settling tolerance below): a
+    // penumbra narrower than that lies within the texels of the centre's
+    // occluder, whose rim rays then read as hidden (a bar under a light of
+    // radius 0.05 on a 128 map). There the test keeps Eq. 4.1's k.
+    if (r * (depth - d_s) < 2.0 * light_texel_size(pvm.light_space, d_s) * depth) {
+        return false;
+    }
+    for (var i = 0; i < 8; i++) {
+        let a = f32(i) * (PI / 4.0);
+        let rim = l + r * (cos(a) * e1 + sin(a) * e2);
+        let d_rim = light_view_depth(pvm.light_space, rim);
+        var d = d_s;
+        var hidden = false;
+        for (var step = 0; step < 16; step++) {
+            // Light depth is affine along a ray in a frustum's view (nearly
+            // so in a cube face's); the rim lies nearer the light than any
+            // surface (no surface touches the light), so depth - d_rim > 0.
+            let t = clamp((depth - d) / max(depth - d_rim, 1e-30), 0.0, 1.0);
+            let m = map_depth(pvm, shadow_map, p + t * (rim - p));
+            if (!(m < depth)) {
+                break;
+            }
+            if (abs(m - d) <= 2.0 * light_texel_size(pvm.light_space, d)) {
+                hidden = true;
+                break;
+            }
+            d = m;
+        }
+        if (!hidden) {
+            return false;
+        }
+    }
+    return true;
+}
+
 // Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
 fn shade(pixel: ScreenPixel) {
     let px = pixel.px;
@@ -297,7 +352,8 @@ fn shade(pixel: ScreenPixel) {
         // (and only the horizon's sliver of the light can be seen).
         if (cos_theta > 0.0) {
             let q = biased_receiver(pvm, p, n, cos_theta);
-            let centre_lit = q.w <= map_depth(pvm, shadow_map, q.xyz);
+            let centre_depth = map_depth(pvm, shadow_map, q.xyz);
+            let centre_lit = q.w <= centre_depth;
             v = select(0.0, 1.0, centre_lit);
             // Listing 4.2: in a volume when the PVDM is nearer the light than the pixel.
             let dims = textureDimensions(edge_index);
@@ -345,6 +401,10 @@ fn shade(pixel: ScreenPixel) {
                             k = two_edge_visibility(p, q.w, edge, other);
                         }
                     }
+                }
+                // umbra_test = "rim" (beyond 4.2): the centre and the rim hidden, p is in the umbra.
+                if ((pvm.mode.y & 32u) != 0u && !centre_lit && k > 0.0 && rim_hidden(p, q.w, centre_depth)) {
+                    k = 0.0;
                 }
                 if ((pvm.mode.y & 2u) == 0u || agrees) {
                     if ((pvm.mode.y & 1u) != 0u) {
