@@ -145,6 +145,20 @@ fn half_planes_fraction(a1: vec2<f32>, c1: f32, a2: vec2<f32>, c2: f32) -> f32 {
     return 0.0;
 }
 
+// Two unit axes of the light's disk as a receiver p sees it: perpendicular
+// to unit(l - p), which is non-zero (no surface touches the light), and to
+// each other (the helper axis is at most 0.7 along it).
+struct DiskAxes {
+    e1: vec3<f32>,
+    e2: vec3<f32>,
+};
+
+fn disk_axes(p: vec3<f32>) -> DiskAxes {
+    let w = unit(pvm.center.xyz - p);
+    let e1 = unit(cross(w, select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(w.x) > 0.7)));
+    return DiskAxes(e1, cross(w, e1));
+}
+
 // Beyond 4.2 (edges = "two", issue 28): the light that two silhouette
 // edges A and B leave a receiver p in both their penumbrae. Each edge's
 // cutting plane cuts the light's disk (seen from p) into a lit side of
@@ -170,14 +184,11 @@ fn two_edge_visibility(p: vec3<f32>, depth: f32, a: EdgePoints, b: EdgePoints) -
     if (!between) {
         return ka;
     }
-    // The light's disk as p sees it: perpendicular to w (unit(l - p) is
-    // non-zero: no surface touches the light), its lines the cutting planes'
-    // traces, the lit sides towards each n.
-    let w = unit(l - p);
-    let e1 = unit(cross(w, select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(w.x) > 0.7)));
-    let e2 = cross(w, e1);
-    let pa = vec2<f32>(dot(ca.n, e1), dot(ca.n, e2));
-    let pb = vec2<f32>(dot(cb.n, e1), dot(cb.n, e2));
+    // The light's disk as p sees it, its lines the cutting planes' traces,
+    // the lit sides towards each n.
+    let disk = disk_axes(p);
+    let pa = vec2<f32>(dot(ca.n, disk.e1), dot(ca.n, disk.e2));
+    let pb = vec2<f32>(dot(cb.n, disk.e1), dot(cb.n, disk.e2));
     // A cutting plane nearly parallel to w has no trace on the disk to speak
     // of (n = 0 too where p lies on an edge's line): A alone decides.
     if (dot(pa, pa) < 1e-6 || dot(pb, pb) < 1e-6) {
@@ -286,10 +297,6 @@ fn volume_at(p: vec3<f32>, depth: f32, t: vec2<i32>, layer: i32, centre_lit: boo
 fn rim_hidden(p: vec3<f32>, depth: f32, d_s: f32) -> bool {
     let l = pvm.center.xyz;
     let r = pvm.center.w;
-    // unit(l - p) is non-zero: no receiver touches the light.
-    let w = unit(l - p);
-    let e1 = unit(cross(w, select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(w.x) > 0.7)));
-    let e2 = cross(w, e1);
     // The map resolves the rim only where the light, seen from p, spans
     // more than 2 of its texels at d_s (the settling tolerance below): a
     // penumbra narrower than that lies within the texels of the centre's
@@ -298,9 +305,10 @@ fn rim_hidden(p: vec3<f32>, depth: f32, d_s: f32) -> bool {
     if (r * (depth - d_s) < 2.0 * light_texel_size(pvm.light_space, d_s) * depth) {
         return false;
     }
+    let disk = disk_axes(p);
     for (var i = 0; i < 8; i++) {
         let a = f32(i) * (PI / 4.0);
-        let rim = l + r * (cos(a) * e1 + sin(a) * e2);
+        let rim = l + r * (cos(a) * disk.e1 + sin(a) * disk.e2);
         let d_rim = light_view_depth(pvm.light_space, rim);
         var d = d_s;
         var hidden = false;
