@@ -100,6 +100,30 @@ def test_kernels_crossing_a_cube_face_are_counted(renderer: penumbra.Renderer) -
     assert 0 < s["face_crossings"] <= s["penumbra_computed"], s
 
 
+@pytest.mark.skipif(penumbra.scenes.meshes_folder() is None, reason="../shared/meshes is absent (the Cornell box)")
+def test_descent_bounds_every_kernel_by_the_cap(renderer: penumbra.Renderer) -> None:
+    """`descent` (issue 30): a steep receiver or a centre-test fallback goes
+    to a finer level only while its kernel spans at most `descent` times the
+    cap (4 t_k samples). With 1, no computed pixel's kernel is wider than
+    the cap at its level; with 4 (the bound before), the Cornell box's walls
+    and contacts have kernels up to 4 caps wide, and more contour edges."""
+    scene = penumbra.scenes.get("cornell_box", width=96, height=96)
+    cap = 4.0 * 8.0
+    widths = {}
+    edges = {}
+    for descent in (1.0, 4.0):
+        result = renderer.render(scene, "backprojection", intermediates=True, descent=descent)
+        computed = result.images["backprojection_class"] == 3
+        level = np.floor(result.images["backprojection_level"][computed])
+        assert level.max() < result.stats["hierarchy_levels"] - 1  # no kernel held wide at the top level
+        widths[descent] = np.maximum(2.0 * result.images["backprojection_kernel"][computed], 1.0) / 2.0**level
+        edges[descent] = result.stats["contour_edges"]
+    assert widths[1.0].max() <= cap * (1 + 1e-5)
+    assert widths[4.0].max() > 2.0 * cap  # measured 128: the bound is what keeps 1's below
+    assert widths[4.0].max() <= 4.0 * cap * (1 + 1e-5)
+    assert edges[1.0] < edges[4.0]
+
+
 def edge_errors(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str = "backprojection", **params: Any) -> np.ndarray:
     result = renderer.render(scene, method, **params)
     exact = exact_edge_visibility(scene)
@@ -214,6 +238,7 @@ def test_pull_push_does_not_bleed_across_object_boundaries(renderer: penumbra.Re
         ({"t_k": 0.0}, ["t_k"]),
         ({"beta": -0.1}, ["beta"]),
         ({"s_min": 0.0}, ["s_min"]),
+        ({"descent": 0.5}, ["descent", "[1, 16]"]),
         ({"light_adaptive": "yes"}, ["light_adaptive"]),
     ],
 )

@@ -150,8 +150,8 @@ fn level_code(h0: f32, lambda: f32, finest: f32) -> vec2<f32> {
         }
     }
     if (lod > finest) {
-        // Never finer than the level where the kernel spans MAX_FALLBACK caps.
-        let floor_level = max(ceil(log2(width / (MAX_FALLBACK * bp.max_kernel))), 0.0);
+        // Never finer than the level where the kernel spans `descent` caps.
+        let floor_level = max(ceil(log2(width / (bp.descent * bp.max_kernel))), 0.0);
         let limited = max(finest, floor_level);
         if (limited < lod) {
             lod = limited;

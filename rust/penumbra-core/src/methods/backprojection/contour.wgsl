@@ -33,7 +33,10 @@ struct Backprojection {
     levels: u32,
     // Largest kernel side, in samples of the level it is taken at.
     max_kernel: f32,
-    pad: u32,
+    // `descent`: how much finer than the kernel cap allows a level may be
+    // (the centre test's fallback in visibility.wgsl, steep receivers in
+    // classify.wgsl): while the kernel spans at most this many times the cap.
+    descent: f32,
     // Per level l: its first texel in `hierarchy`, and its side in texels.
     level_offset: array<vec4<u32>, 4>,
     level_size: array<vec4<u32>, 4>,
@@ -60,10 +63,6 @@ const KERNEL_SLACK: f32 = 1.05;
 // samples wider. (Edges lie inside their block's cell, and every cell
 // meeting the kernel is read.)
 const KERNEL_MARGIN: f32 = 0.5;
-// How much finer than the kernel cap allows a level may be (the centre
-// test's fallback in visibility.wgsl, steep receivers in classify.wgsl):
-// while the kernel spans at most this many times the cap.
-const MAX_FALLBACK: f32 = 4.0;
 // Homogeneous weight below which a backprojected point is clipped: the part
 // of an edge no nearer the light than the receiver is (see `edge_term`).
 const MIN_W: f32 = 1e-5;

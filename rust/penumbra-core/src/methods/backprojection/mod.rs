@@ -79,6 +79,10 @@ pub struct BackprojectionParams {
     /// Coarse levels' contour crossings found on level 0 (true), or 5.1's
     /// (t = 1: the occluders' centres, at their footprints' minimum depth).
     pub refined_contour: bool,
+    /// How many times the kernel cap a kernel may span where a pixel goes
+    /// finer than the cap allows (a steep receiver, the centre test's
+    /// fallback): 1 bounds every pixel's work by the cap's.
+    pub descent: f32,
 }
 
 crate::gpu_type! {
@@ -91,7 +95,7 @@ crate::gpu_type! {
         pub(crate) flags: u32,
         pub(crate) levels: u32,
         pub(crate) max_kernel: f32,
-        pub(crate) pad: u32,
+        pub(crate) descent: f32,
         pub(crate) level_offset: [[u32; 4]; 4],
         pub(crate) level_size: [[u32; 4]; 4],
     }
@@ -244,6 +248,13 @@ impl MethodParams for BackprojectionParams {
                 &["centres", "refined"],
                 "contours on coarse levels (5.1): refined (beyond the paper: each crossing of a sample side found on the map by bisection, at the depth found there), centres (the paper's: shrunk onto the occluding samples' centres, t = 1, at their footprints' minimum depths)",
             ),
+            ParamSpec::float(
+                "descent",
+                1.0,
+                1.0,
+                16.0,
+                "beyond the paper: how many times the kernel cap (4 t_k samples) a kernel may span where a pixel goes to a finer level than the cap allows, a steep receiver or a coarse level whose centre test disagrees with level 0's (1: every pixel's work within the cap's; 4: the default before issue 30's bound)",
+            ),
         ]);
         specs
     }
@@ -258,6 +269,7 @@ impl MethodParams for BackprojectionParams {
             light_adaptive: p.bool("light_adaptive"),
             screen_adaptive: p.bool("screen_adaptive"),
             refined_contour: p.choice("coarse_contour") == "refined",
+            descent: p.float("descent") as f32,
         })
     }
 }
@@ -453,7 +465,7 @@ impl SoftShadowBackprojection {
             flags: u32::from(params.light_adaptive) | (u32::from(params.screen_adaptive) << 1) | (u32::from(params.refined_contour) << 2),
             levels,
             max_kernel,
-            pad: 0,
+            descent: params.descent,
             level_offset,
             level_size,
         })

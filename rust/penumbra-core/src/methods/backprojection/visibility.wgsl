@@ -24,11 +24,11 @@ const C_BLENDED: u32 = 7u;
 const C_FALLBACKS: u32 = 17u;
 const C_CROSSINGS: u32 = 19u;
 // Levels a kernel crossing a cube face's edge goes down (see `main`), while
-// it spans at most CROSSING_BUDGET times the kernel cap at the finer level:
-// the descent's cost (4x the samples a level) stays within 4x the cap's.
-// (Up to MAX_FALLBACK caps, as the centre test's, it cost up to 16x:
-// `backprojection` took 15x `hard`'s time on a wide floor under a large
-// light, issue 30.)
+// it spans at most CROSSING_BUDGET times the kernel cap at the finer level
+// (and `descent` caps, as the centre test's fallback): the descent's cost
+// (4x the samples a level) stays within 4x the cap's. (Up to 4 caps, it
+// cost up to 16x: `backprojection` took 15x `hard`'s time on a wide floor
+// under a large light, issue 30.)
 const CROSSING_LEVELS: u32 = 2u;
 const CROSSING_BUDGET: f32 = 2.0;
 
@@ -59,7 +59,7 @@ fn main(
     // its contour then puts the light's centre on the wrong side and the
     // integral is off by the whole disk. Where the centre test of the chosen
     // level disagrees with level 0's, the level goes down until they agree
-    // (within MAX_FALLBACK times the kernel cap), without blending.
+    // (within `descent` times the kernel cap), without blending.
     // On a cube, a coarse sample beyond the face reads the neighbour face's
     // texel holding its centre, whose footprint there is turned and
     // stretched against the sample's: a kernel crossing a face edge goes
@@ -98,7 +98,7 @@ fn main(
                 continue;
             }
             let finer = 2.0 * h0 / f32(1u << (lod - 1u));
-            if (finer > MAX_FALLBACK * bp.max_kernel) {
+            if (finer > bp.descent * bp.max_kernel) {
                 stage = 2u;
                 continue;
             }
