@@ -102,11 +102,12 @@ def test_kernels_crossing_a_cube_face_are_counted(renderer: penumbra.Renderer) -
 
 @pytest.mark.skipif(penumbra.scenes.meshes_folder() is None, reason="../shared/meshes is absent (the Cornell box)")
 def test_descent_bounds_every_kernel_by_the_cap(renderer: penumbra.Renderer) -> None:
-    """`descent` (issue 30): a steep receiver or a centre-test fallback goes
-    to a finer level only while its kernel spans at most `descent` times the
-    cap (4 t_k samples). With 1, no computed pixel's kernel is wider than
-    the cap at its level; with 4 (the bound before), the Cornell box's walls
-    and contacts have kernels up to 4 caps wide, and more contour edges."""
+    """`descent` (issue 30): a steep receiver goes to a finer level only
+    while its kernel spans at most `descent` times the cap (4 t_k samples),
+    and a centre-test fallback walks its kernel cut to that width. With 1,
+    no computed pixel's kernel is wider than the cap at its classified
+    level; with 4, the Cornell box's walls and contacts have kernels up to
+    4 caps wide, and the walks read more contour edges."""
     scene = penumbra.scenes.get("cornell_box", width=96, height=96)
     cap = 4.0 * 8.0
     widths = {}
@@ -118,6 +119,7 @@ def test_descent_bounds_every_kernel_by_the_cap(renderer: penumbra.Renderer) -> 
         assert level.max() < result.stats["hierarchy_levels"] - 1  # no kernel held wide at the top level
         widths[descent] = np.maximum(2.0 * result.images["backprojection_kernel"][computed], 1.0) / 2.0**level
         edges[descent] = result.stats["contour_edges"]
+        assert result.stats["level_fallbacks"] > 0  # contacts: the cut walk is exercised
     assert widths[1.0].max() <= cap * (1 + 1e-5)
     assert widths[4.0].max() > 2.0 * cap  # measured 128: the bound is what keeps 1's below
     assert widths[4.0].max() <= 4.0 * cap * (1 + 1e-5)

@@ -33,9 +33,10 @@ struct Backprojection {
     levels: u32,
     // Largest kernel side, in samples of the level it is taken at.
     max_kernel: f32,
-    // `descent`: how much finer than the kernel cap allows a level may be
-    // (the centre test's fallback in visibility.wgsl, steep receivers in
-    // classify.wgsl): while the kernel spans at most this many times the cap.
+    // `descent`: how many times the kernel cap a kernel may span where a
+    // pixel goes finer than the cap allows: a steep receiver's level
+    // (classify.wgsl) no finer than that, and the kernel a centre-test
+    // fallback walks (visibility.wgsl) cut to that.
     descent: f32,
     // Per level l: its first texel in `hierarchy`, and its side in texels.
     level_offset: array<vec4<u32>, 4>,

@@ -80,8 +80,9 @@ pub struct BackprojectionParams {
     /// (t = 1: the occluders' centres, at their footprints' minimum depth).
     pub refined_contour: bool,
     /// How many times the kernel cap a kernel may span where a pixel goes
-    /// finer than the cap allows (a steep receiver, the centre test's
-    /// fallback): 1 bounds every pixel's work by the cap's.
+    /// finer than the cap allows: a steep receiver goes no finer, and a
+    /// centre-test fallback walks its kernel cut to that width. 1 bounds
+    /// every pixel's work by the cap's.
     pub descent: f32,
 }
 
@@ -253,7 +254,7 @@ impl MethodParams for BackprojectionParams {
                 1.0,
                 1.0,
                 16.0,
-                "beyond the paper: how many times the kernel cap (4 t_k samples) a kernel may span where a pixel goes to a finer level than the cap allows, a steep receiver or a coarse level whose centre test disagrees with level 0's (1: every pixel's work within the cap's; 4: the default before issue 30's bound)",
+                "beyond the paper: how many times the kernel cap (4 t_k samples) a kernel may span where a pixel goes to a finer level than the cap allows: a steep receiver goes no finer, and a pixel whose coarse level's centre test disagrees with level 0's goes down until they agree and walks its kernel cut to that width (1: every pixel's work within the cap's; up to issue 30 both stopped at 4 caps)",
             ),
         ]);
         specs

@@ -25,7 +25,7 @@ const C_FALLBACKS: u32 = 17u;
 const C_CROSSINGS: u32 = 19u;
 // Levels a kernel crossing a cube face's edge goes down (see `main`), while
 // it spans at most CROSSING_BUDGET times the kernel cap at the finer level
-// (and `descent` caps, as the centre test's fallback): the descent's cost
+// (and `descent` caps): the descent's cost
 // (4x the samples a level) stays within 4x the cap's. (Up to 4 caps, it
 // cost up to 16x: `backprojection` took 15x `hard`'s time on a wide floor
 // under a large light, issue 30.)
@@ -58,8 +58,8 @@ fn main(
     // its footprint) can cover p' where the map does not, or the reverse:
     // its contour then puts the light's centre on the wrong side and the
     // integral is off by the whole disk. Where the centre test of the chosen
-    // level disagrees with level 0's, the level goes down until they agree
-    // (within `descent` times the kernel cap), without blending.
+    // level disagrees with level 0's, the level goes down until they agree,
+    // without blending (its kernel then walked within `descent` caps, below).
     // On a cube, a coarse sample beyond the face reads the neighbour face's
     // texel holding its centre, whose footprint there is turned and
     // stretched against the sample's: a kernel crossing a face edge goes
@@ -98,11 +98,7 @@ fn main(
                 continue;
             }
             let finer = 2.0 * h0 / f32(1u << (lod - 1u));
-            if (finer > bp.descent * bp.max_kernel) {
-                stage = 2u;
-                continue;
-            }
-            if (lod > cross_level && finer <= CROSSING_BUDGET * bp.max_kernel) {
+            if (lod > cross_level && finer <= min(CROSSING_BUDGET, bp.descent) * bp.max_kernel) {
                 lod -= 1u;
                 fell = true;
                 continue;
@@ -150,8 +146,16 @@ fn main(
     let count = select(1u, 2u, other_level != lod);
     var v = 0.0;
     var edges = 0u;
+    // A pixel that fell back walks at most `descent` caps of its kernel at
+    // the level it fell to (issue 30): its work stays within that many
+    // caps', and the contour around p', which the centre test needed, is
+    // whole; occluders farther out in the map than that are left out. (Up
+    // to issue 30 the fallback stopped at 4 caps instead, 16 times the
+    // cap's samples, and a pixel that needed a finer level kept one whose
+    // centre test disagreed with level 0's.)
+    let h_walk = select(h0, min(h0, 0.5 * bp.descent * bp.max_kernel * f32(1u << lod)), fell);
     for (var k = 0u; k < count; k++) {
-        let vis = visibility(r, select(lod, other_level, k == 1u), h0);
+        let vis = visibility(r, select(lod, other_level, k == 1u), h_walk);
         v = select(vis.v, mix(v, vis.v, weight), k == 1u);
         edges += vis.edges;
     }
