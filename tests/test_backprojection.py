@@ -107,23 +107,26 @@ def test_descent_bounds_every_kernel_by_the_cap(renderer: penumbra.Renderer) -> 
     and a centre-test fallback walks its kernel cut to that width. With 1,
     no computed pixel's kernel is wider than the cap at its classified
     level; with 4, the Cornell box's walls and contacts have kernels up to
-    4 caps wide, and the walks read more contour edges."""
+    4 caps wide, and the visibility pass walks over six times the blocks
+    (measured at 96x96: 0.90M against 5.91M). The cut of a fallback's walk
+    to `descent` caps is a worst-case bound this scene hardly meets (1% of
+    the blocks at 256x256): not what this test holds."""
     scene = penumbra.scenes.get("cornell_box", width=96, height=96)
     cap = 4.0 * 8.0
     widths = {}
-    edges = {}
+    blocks = {}
     for descent in (1.0, 4.0):
         result = renderer.render(scene, "backprojection", intermediates=True, descent=descent)
         computed = result.images["backprojection_class"] == 3
         level = np.floor(result.images["backprojection_level"][computed])
         assert level.max() < result.stats["hierarchy_levels"] - 1  # no kernel held wide at the top level
         widths[descent] = np.maximum(2.0 * result.images["backprojection_kernel"][computed], 1.0) / 2.0**level
-        edges[descent] = result.stats["contour_edges"]
+        blocks[descent] = result.stats["blocks_read"]
         assert result.stats["level_fallbacks"] > 0  # contacts: the cut walk is exercised
     assert widths[1.0].max() <= cap * (1 + 1e-5)
     assert widths[4.0].max() > 2.0 * cap  # measured 128: the bound is what keeps 1's below
     assert widths[4.0].max() <= 4.0 * cap * (1 + 1e-5)
-    assert edges[1.0] < edges[4.0]
+    assert blocks[1.0] < 0.3 * blocks[4.0]
 
 
 def edge_errors(renderer: penumbra.Renderer, scene: penumbra.Scene, method: str = "backprojection", **params: Any) -> np.ndarray:

@@ -24,7 +24,7 @@ struct PixelList {
 @group(0) @binding(9) var kernel_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(10) var level_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(11) var<storage, read_write> list: PixelList;
-@group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>, 20>;
+@group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>, 21>;
 // The object map and each mesh's object (passes/object_map.rs).
 @group(0) @binding(13) var object_map: texture_2d_array<u32>;
 @group(0) @binding(14) var<storage, read> mesh_objects: array<u32>;

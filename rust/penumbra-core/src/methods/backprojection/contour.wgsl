@@ -759,6 +759,8 @@ fn beyond_face_bounds(r: BpReceiver, li: LevelInfo, ab: vec2<i32>) -> vec3<f32> 
 struct Visibility {
     v: f32,
     edges: u32,
+    // Blocks of 2 x 2 samples walked (the work `descent` bounds).
+    blocks: u32,
 };
 
 // The centre test of 4.2 alone at `level`: whether the block of samples
@@ -812,6 +814,7 @@ fn visibility(r: BpReceiver, level: u32, h0: f32) -> Visibility {
     let thi = hi >> vec2<u32>(2u);
     var area = 0.0;
     var edges = 0u;
+    var blocks = 0u;
     var inside = false;
     for (var tb = tlo.y; tb <= thi.y; tb++) {
         // A block's samples lie in its tile and the next ones along x and y.
@@ -838,6 +841,7 @@ fn visibility(r: BpReceiver, level: u32, h0: f32) -> Visibility {
                     inside = st == OCCLUDED;
                 }
             } else {
+                blocks += u32((b1.x - b0.x + 1) * (b1.y - b0.y + 1));
                 for (var j = b0.y; j <= b1.y; j++) {
                     var s0 = read_sample(r, li, vec2<i32>(b0.x, j));
                     var s3 = read_sample(r, li, vec2<i32>(b0.x, j + 1));
@@ -875,5 +879,5 @@ fn visibility(r: BpReceiver, level: u32, h0: f32) -> Visibility {
     } else {
         v = 1.0 - w - area / PI;
     }
-    return Visibility(clamp(v, 0.0, 1.0), edges);
+    return Visibility(clamp(v, 0.0, 1.0), edges, blocks);
 }

@@ -146,7 +146,9 @@ crate::gpu_type! {
 /// centre test disagreed with the map's (`visibility.wgsl`), and pixels
 /// whose receiver, steep in the map, forced a finer level (`classify.wgsl`),
 /// and computed pixels whose kernel crosses a cube face's edge (each goes
-/// down `CROSSING_LEVELS` levels in `visibility.wgsl`).
+/// down `CROSSING_LEVELS` levels in `visibility.wgsl`), and the blocks of
+/// 2 x 2 samples the visibility pass walked (its work, which `descent`
+/// bounds; tiles skipped whole are not counted).
 pub const COUNTER_NAMES: &[&str] = &[
     "lit_pixels",
     "umbra_pixels",
@@ -168,6 +170,7 @@ pub const COUNTER_NAMES: &[&str] = &[
     "level_fallbacks",
     "steep_receivers",
     "face_crossings",
+    "blocks_read",
 ];
 
 /// Sizes and places of the hierarchy's levels: level 0 is the map; level

@@ -17,12 +17,13 @@ struct PixelList {
 @group(0) @binding(7) var level_in: texture_2d<f32>;
 @group(0) @binding(8) var<storage, read> list: PixelList;
 @group(0) @binding(9) var visibility_out: texture_storage_2d<r32float, write>;
-@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>, 20>;
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>, 21>;
 
 const C_EDGES: u32 = 6u;
 const C_BLENDED: u32 = 7u;
 const C_FALLBACKS: u32 = 17u;
 const C_CROSSINGS: u32 = 19u;
+const C_BLOCKS: u32 = 20u;
 // Levels a kernel crossing a cube face's edge goes down (see `main`), while
 // it spans at most CROSSING_BUDGET times the kernel cap at the finer level
 // (and `descent` caps): the descent's cost
@@ -146,6 +147,7 @@ fn main(
     let count = select(1u, 2u, other_level != lod);
     var v = 0.0;
     var edges = 0u;
+    var blocks = 0u;
     // A pixel that fell back walks at most `descent` caps of its kernel at
     // the level it fell to (issue 30): its work stays within that many
     // caps', and the contour around p', which the centre test needed, is
@@ -158,10 +160,12 @@ fn main(
         let vis = visibility(r, select(lod, other_level, k == 1u), h_walk);
         v = select(vis.v, mix(v, vis.v, weight), k == 1u);
         edges += vis.edges;
+        blocks += vis.blocks;
     }
     if (count == 2u) {
         atomicAdd(&counters[C_BLENDED], 1u);
     }
     atomicAdd(&counters[C_EDGES], edges);
+    atomicAdd(&counters[C_BLOCKS], blocks);
     textureStore(visibility_out, px, vec4<f32>(clamp(v, 0.0, 1.0), 0.0, 0.0, 0.0));
 }
