@@ -94,7 +94,7 @@ def test_sweep_is_bit_identical_with_and_without_the_cache(cached: penumbra.Rend
         configs += [(s, "pvmf", {"map_size": MAP, "n_blur": n}) for n in (0, 4, 12)]
         configs += [(s, "pvmf", {"map_size": MAP, "s_p": 1.0})]
         configs += [(s, "pvm", {"map_size": MAP, "falloff": f}) for f in (True, False)]
-        configs += [(s, "pvm", {"map_size": MAP, "edges": e}) for e in ("two", "one")]
+        configs += [(s, "pvm", {"map_size": MAP, "edges": e}) for e in ("two", "one", "chain")]
         configs += [(s, m, {"map_size": MAP}) for m in ("hard", "pcf", "pcss")]
         configs += [(s, "reference", {"n_samples": 4})]
     configs += [(scene(light_radius=0.0), "pvmf", {"map_size": MAP, "n_blur": n}) for n in (0, 4)]

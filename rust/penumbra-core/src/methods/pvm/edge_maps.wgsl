@@ -6,6 +6,7 @@
 struct EdgePoints {
     h0: vec4<f32>,
     h1: vec4<f32>,
+    links: vec4<u32>,
 };
 
 @group(0) @binding(0) var edge_index: texture_2d_array<u32>;

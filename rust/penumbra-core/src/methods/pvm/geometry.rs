@@ -21,12 +21,16 @@ pub struct VolumeVertex {
 }
 
 crate::gpu_type! {
-    /// The end points h0 and h1 of a silhouette edge with a volume (w unused),
-    /// as the visibility pass reads them (4.1.3's edge maps, by index).
+    /// The end points h0 and h1 of a silhouette edge with a volume (h0.w:
+    /// its surface; h1.w unused), as the visibility pass reads them (4.1.3's
+    /// edge maps, by index), and its neighbours along its silhouette loop
+    /// (`links`: x the index + 1 of the edge ending at h0, y of the edge
+    /// starting at h1, 0 where h0 or h1 is a junction; for `edges = "chain"`).
     #[derive(Debug, PartialEq)]
     pub struct EdgePoints => "EdgePoints" in "methods/pvm/visibility.wgsl" {
         pub h0: [f32; 4],
         pub h1: [f32; 4],
+        pub links: [u32; 4],
     }
 }
 
@@ -178,6 +182,17 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, 
     junctions.dedup();
     stats.junction_vertices = junctions.len();
 
+    // Each edge's index among those with a volume (the buffer's order).
+    let mut index = vec![u32::MAX; edges.len()];
+    let mut next = 0u32;
+    for (i, slot) in index.iter_mut().enumerate() {
+        if planes[i].is_some() {
+            *slot = next;
+            next += 1;
+        }
+    }
+    // The index + 1 of vertex v's incoming (or outgoing) edge where v pairs two.
+    let link = |v: u32, incoming: bool| -> u32 { paired(v).map_or(0, |(i, o)| index[if incoming { i } else { o }] + 1) };
     let mut vertices = Vec::with_capacity(edges.len() * 12);
     let mut points = Vec::with_capacity(edges.len());
     let outside = std::cell::Cell::new(0usize);
@@ -209,7 +224,7 @@ pub fn penumbra_volumes(edges: &[SilhouetteEdge], l: DVec3, r: f64, reach: f64, 
         let [ax, ay, az] = f(e.a);
         let [bx, by, bz] = f(e.b);
         // h0.w: the edge's surface (exact in f32 below 2^24 components).
-        points.push(EdgePoints { h0: [ax, ay, az, e.component as f32], h1: [bx, by, bz, 1.0] });
+        points.push(EdgePoints { h0: [ax, ay, az, e.component as f32], h1: [bx, by, bz, 1.0], links: [link(e.ia, true), link(e.ib, false), 0, 0] });
         for (va, vb) in [(a_out, b_out), (a_in, b_in)] {
             let quad = [e.a, e.a + va * reach, e.b + vb * reach, e.b];
             for k in [0, 1, 2, 0, 2, 3] {
@@ -263,6 +278,36 @@ mod tests {
         assert!(vertices.iter().all(|v| v.position.iter().all(|c| c.is_finite())));
         // Extruded corners go away from the light (downwards here).
         assert!(vertices.iter().all(|v| v.position[1] <= 2.5 + 1e-6));
+    }
+
+    #[test]
+    fn links_follow_the_loop_and_stop_at_junctions() {
+        // The cube's square loop: each edge's next starts where it ends, and
+        // its previous edge's next is itself.
+        let l = DVec3::new(0.0, 6.0, 0.0);
+        let points = penumbra_volumes(&silhouette(&cube(), l, false), l, 0.5, 10.0, true).edges;
+        assert_eq!(points.len(), 4);
+        for (i, e) in points.iter().enumerate() {
+            let [prev, next, ..] = e.links;
+            assert!(prev > 0 && next > 0, "{e:?}");
+            let (p, n) = (&points[prev as usize - 1], &points[next as usize - 1]);
+            assert_eq!(n.h0[..3], e.h1[..3]);
+            assert_eq!(p.h1[..3], e.h0[..3]);
+            assert_eq!(n.links[0] as usize, i + 1);
+            assert_eq!(p.links[1] as usize, i + 1);
+        }
+        // An open chain with an edge pointing at the light (no volume) in
+        // the middle: links skip no edge, so the ends and both sides of the
+        // light-parallel edge have none; indices count the edges with volumes.
+        let chain = vec![
+            SilhouetteEdge { a: DVec3::new(-1.0, 1.0, 0.0), b: DVec3::new(0.0, 1.0, 0.0), ia: 0, ib: 1, component: 0 },
+            SilhouetteEdge { a: DVec3::new(0.0, 1.0, 0.0), b: DVec3::new(1.0, 1.0, 0.0), ia: 1, ib: 2, component: 0 },
+            SilhouetteEdge { a: DVec3::new(1.0, 1.0, 0.0), b: DVec3::new(1.0, 2.0, 0.0), ia: 2, ib: 3, component: 0 },
+            SilhouetteEdge { a: DVec3::new(1.0, 2.0, 0.0), b: DVec3::new(2.0, 2.0, 0.0), ia: 3, ib: 4, component: 0 },
+        ];
+        let l = DVec3::new(1.0, 5.0, 0.0);
+        let links: Vec<[u32; 2]> = penumbra_volumes(&chain, l, 0.5, 10.0, true).edges.iter().map(|e| [e.links[0], e.links[1]]).collect();
+        assert_eq!(links, vec![[0, 2], [1, 0], [0, 0]]);
     }
 
     #[test]

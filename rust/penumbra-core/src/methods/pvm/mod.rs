@@ -74,6 +74,12 @@ pub struct PvmParams {
     /// and a pixel inside both edges' penumbrae takes the light the two
     /// edges leave it together (`two_edge_visibility` in visibility.wgsl).
     pub two_edges: bool,
+    /// `edges = "chain"` (beyond 4.2, which takes the nearest volume's edge
+    /// for a half-plane; the default): as `"two"`, and where the shadow map
+    /// sees the light's centre the pixel's light is the disk less the part
+    /// its edge's silhouette loop covers, walked from that edge both ways
+    /// (`chain_visibility` in visibility.wgsl).
+    pub chain_edges: bool,
     /// `lookup = "3x3"` (beyond 4.2, which reads the texel under the pixel):
     /// where that texel's volume does not hold the pixel, the neighbour
     /// texels' volumes may (`volume_at` in visibility.wgsl).
@@ -107,7 +113,7 @@ pub fn volumes_key(params: &PvmParams, projection: &LightProjection, (l, r): (DV
     key.f64s(&l.to_array())
         .f64s(&[r])
         .bytes(params.open_edges.name().as_bytes())
-        .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden), u8::from(params.two_edges)])
+        .bytes(&[u8::from(params.repairs.cone), u8::from(params.repairs.hidden), u8::from(params.two_edges || params.chain_edges)])
         .projection(projection)
         .u32(params.shadow.map_size)
         .u32(volume_map);
@@ -139,14 +145,18 @@ impl MethodParams for PvmParams {
             // Beyond 4.1.3 (issue 28), whose map keeps one edge per texel:
             // where two edges' penumbrae overlap (a shadow thinner than the
             // light's, a convex corner), one edge's disk fraction is wrong.
-            // The default since, with "auto" and "3x3" below, it lowered the
-            // penumbra RMSE on 34 of the 40 generated scenes and 53 of the
-            // slow suite's 60 (docs/methods/pvm.md).
+            // "two", with "auto" and "3x3" below, lowered the penumbra RMSE
+            // on 34 of the 40 generated scenes and 53 of the slow suite's 60.
+            // "chain" (the default since) walks the edge's silhouette loop
+            // where the map sees the light's centre, "two" deciding
+            // elsewhere: lower again on 18 of the 40 (higher on 2), 34 of the
+            // 60 (1) and 13 of the 15 shared-mesh scenes (0)
+            // (docs/methods/pvm.md).
             ParamSpec::choice(
                 "edges",
-                "two",
-                &["one", "two"],
-                "edges per volume-map texel: one, the volume nearest the light (4.1.3); two, also the farthest, combined where a pixel lies in both penumbrae",
+                "chain",
+                &["one", "two", "chain"],
+                "edges per volume-map texel: one, the volume nearest the light (4.1.3); two, also the farthest, combined where a pixel lies in both penumbrae; chain, as two, and where the map sees the light's centre the disk less what the nearest edge's silhouette loop covers (walked from that edge)",
             ),
             // Beyond 4.1.3, whose volume map is the shadow map's size (issue
             // 30): the volume passes' cost is their texels. Alone, a texel
@@ -199,6 +209,7 @@ impl MethodParams for PvmParams {
             falloff: p.bool("falloff"),
             volume_map_auto: p.choice("volume_map_size") == "auto",
             two_edges: p.choice("edges") == "two",
+            chain_edges: p.choice("edges") == "chain",
             lookup_neighbours: p.choice("lookup") == "3x3",
             rim_test: p.choice("umbra_test") == "rim",
             open_edges: OpenEdges::parse(p.choice("open_edges")),
@@ -265,7 +276,8 @@ impl Method for PenumbraVolumeMaps {
                 | (u32::from(params.repairs.horizon) << 2)
                 | (u32::from(volumes.far_edge_index.is_some()) << 3)
                 | (u32::from(params.lookup_neighbours) << 4)
-                | (u32::from(params.rim_test) << 5);
+                | (u32::from(params.rim_test) << 5)
+                | (u32::from(params.chain_edges) << 6);
             let uniforms = ctx.parameters(
                 "pvm::visibility_uniforms",
                 &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags),
@@ -323,7 +335,7 @@ impl PenumbraVolumeMaps {
                 geometry.stats.silhouette.add_scene(&silhouette);
             }
             // A storage binding may not be empty: one zeroed entry stands for no edges.
-            let points = if geometry.edges.is_empty() { vec![EdgePoints { h0: [0.0; 4], h1: [0.0; 4] }] } else { std::mem::take(&mut geometry.edges) };
+            let points = if geometry.edges.is_empty() { vec![EdgePoints { h0: [0.0; 4], h1: [0.0; 4], links: [0; 4] }] } else { std::mem::take(&mut geometry.edges) };
             let bytes: &[u8] = bytemuck::cast_slice(&points);
             let edges = ctx.buffer("pvm::edges", bytes.len() as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
             ctx.queue.write_buffer(&edges, 0, bytes);
@@ -332,8 +344,8 @@ impl PenumbraVolumeMaps {
             let depth = depth.expect("a depth pass (Keep::Nearest) returns its depth map");
             Ok((depth, vertices, edges, geometry.stats, cache_hits))
         })??;
-        // edges = "two": the same volumes again, the farthest kept (its own pass, timed apart).
-        let far_edge_index = if params.two_edges {
+        // edges = "two" (and "chain"): the same volumes again, the farthest kept (its own pass, timed apart).
+        let far_edge_index = if params.two_edges || params.chain_edges {
             let far = frame.ctx.light_texture("pvm::far_edge_index_map", map, projection.layers(), EDGE_INDEX_FORMAT, usage);
             frame.pass("far_volumes", |ctx, encoder, ts| {
                 self.far_volume_pass.record_uploaded(ctx, encoder, projection, &vertices, map, &[&far], ts);
