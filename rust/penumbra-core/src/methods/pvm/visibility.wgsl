@@ -301,6 +301,58 @@ fn unit2(v: vec2<f32>) -> vec2<f32> {
     return select(vec2<f32>(0.0), v / len, len > 0.0);
 }
 
+// One way of `chain_visibility`'s walk along a silhouette loop: where it
+// ended on the disk and the direction it went on in, the sums of
+// `disk_in_triangle` and `turn` along it (in the walk's direction), the
+// last edge taken, and whether it came round to the edge it was to stop at.
+struct Walk {
+    end: vec2<f32>,
+    dir: vec2<f32>,
+    area: f32,
+    swept: f32,
+    last: u32,
+    closed: bool,
+};
+
+// Walks from the point `start` (going on in `dir`) along the loop, edge
+// link `link` (index + 1) first, through `links.y` (forward: each edge from
+// h0 to h1) or `links.x` (backward: from h1 to h0), while the path can still
+// reach the disk, at most CHAIN_STEPS edges; closed on reaching edge `stop`.
+// `open`: the start was clipped behind p, so the loop does not go on there.
+fn walk_loop(view: DiskView, link: u32, forward: bool, stop: u32, start: vec2<f32>, dir: vec2<f32>, open: bool) -> Walk {
+    var w = Walk(start, dir, 0.0, 0.0, stop, false);
+    if (open) {
+        return w;
+    }
+    let count = arrayLength(&edges);
+    var j = link;
+    for (var step = 0; step < CHAIN_STEPS && j != 0u; step++) {
+        if (j - 1u == stop) {
+            w.closed = true;
+            break;
+        }
+        if (!ray_meets_disk(w.end, w.dir)) {
+            break;
+        }
+        let f = edges[min(j - 1u, count - 1u)];
+        let seen = seen_segment(view, select(f.h1.xyz, f.h0.xyz, forward), select(f.h0.xyz, f.h1.xyz, forward));
+        if (!seen.ok) {
+            break;
+        }
+        w.area += disk_in_triangle(w.end, seen.b);
+        w.swept += turn(w.end, seen.b);
+        let d = unit2(seen.b - w.end);
+        w.dir = select(w.dir, d, dot(d, d) > 0.0);
+        w.end = seen.b;
+        w.last = j - 1u;
+        if (seen.cut) {
+            break;
+        }
+        j = select(f.links.x, f.links.y, forward);
+    }
+    return w;
+}
+
 // edges = "chain" (beyond 4.2, issue 28): the light that silhouette edge e
 // (at `index`) and its silhouette loop leave receiver p. 4.2 takes e for a
 // half-plane: where the occluder's outline turns within the light's disk
@@ -343,68 +395,24 @@ fn chain_visibility(p: vec3<f32>, index: u32, fallback: f32, centre_lit: bool) -
         return fallback;
     }
     let lit_left = cross2(dir, lit) > 0.0;
-    let count = arrayLength(&edges);
     var area = disk_in_triangle(first.a, first.b);
     // The angle the path sweeps about the disk's centre: with its closure,
     // 2 pi times its winding number there.
     var swept = turn(first.a, first.b);
-    // Forward from h1.
-    var tail = first.b;
-    var tail_dir = dir;
-    var last = index;
-    var closed = false;
-    var j = e.links.y;
-    var open = first.cut;
-    for (var step = 0; step < CHAIN_STEPS && !open && j != 0u; step++) {
-        if (j - 1u == index) {
-            closed = true;
-            break;
-        }
-        if (!ray_meets_disk(tail, tail_dir)) {
-            break;
-        }
-        let f = edges[min(j - 1u, count - 1u)];
-        let seen = seen_segment(view, f.h0.xyz, f.h1.xyz);
-        if (!seen.ok) {
-            break;
-        }
-        area += disk_in_triangle(tail, seen.b);
-        swept += turn(tail, seen.b);
-        let d = unit2(seen.b - tail);
-        tail_dir = select(tail_dir, d, dot(d, d) > 0.0);
-        tail = seen.b;
-        last = j - 1u;
-        open = seen.cut;
-        j = f.links.y;
+    // Forward from h1, then backward from h0 until the walk meets the forward one.
+    let ahead = walk_loop(view, e.links.y, true, index, first.b, dir, first.cut);
+    var back = Walk(first.a, -dir, 0.0, 0.0, index, ahead.closed);
+    if (!ahead.closed) {
+        back = walk_loop(view, e.links.x, false, ahead.last, first.a, -dir, first.cut_a);
     }
-    // Backward from h0, until the walk meets the forward one.
-    var head = first.a;
-    var head_dir = -dir;
-    j = e.links.x;
-    for (var step = 0; step < CHAIN_STEPS && !closed && !first.cut_a && j != 0u; step++) {
-        if (j - 1u == last) {
-            closed = true;
-            break;
-        }
-        if (!ray_meets_disk(head, head_dir)) {
-            break;
-        }
-        let f = edges[min(j - 1u, count - 1u)];
-        // Walked backwards: the segment from its h1 (the head) to its h0.
-        let seen = seen_segment(view, f.h1.xyz, f.h0.xyz);
-        if (!seen.ok) {
-            break;
-        }
-        area += disk_in_triangle(seen.b, head);
-        swept += turn(seen.b, head);
-        let d = unit2(seen.b - head);
-        head_dir = select(head_dir, d, dot(d, d) > 0.0);
-        head = seen.b;
-        if (seen.cut) {
-            break;
-        }
-        j = f.links.x;
-    }
+    let closed = back.closed;
+    let tail = ahead.end;
+    let tail_dir = ahead.dir;
+    let head = back.end;
+    let head_dir = back.dir;
+    // Walked backwards, the path runs the other way: its terms change sign.
+    area += ahead.area - back.area;
+    swept += ahead.swept - back.swept;
     // A walk that ends where the loop could still reach the disk leaves
     // the occluder's outline unknown there.
     if (!closed && (ray_meets_disk(tail, tail_dir) || ray_meets_disk(head, head_dir))) {
