@@ -438,7 +438,7 @@ impl<'r> FrameContext<'r> {
     /// The largest storage buffer the adapter binds, in bytes.
     pub fn max_storage_buffer(&self) -> u64 {
         let limits = self.device.limits();
-        (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size)
+        limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
     }
 
     /// Refuses a storage buffer of `bytes` beyond the adapter's limit for

@@ -185,7 +185,7 @@ impl Occluders {
                     continue;
                 }
                 let cost = left_area * left_n as f64 + area(b.0, b.1) * n as f64;
-                if best.map_or(true, |(c, _, _)| cost < c) {
+                if best.is_none_or(|(c, _, _)| cost < c) {
                     best = Some((cost, axis, i));
                 }
             }

@@ -157,7 +157,7 @@ pub fn convert<T: Sync, U: Send + Copy + Default>(src: &[T], group: usize, out: 
 /// (copying rows out of mapped memory, texels into RGB triples or object
 /// ids) was most of its wall time on a GPU (docs/gpu_timings.md).
 fn in_bands<T: Sync, U: Send>(src: &[T], group: usize, dst: &mut [U], out: usize, f: impl Fn(&[T], &mut [U]) + Sync) {
-    let groups = if out == 0 { 0 } else { dst.len() / out };
+    let groups = dst.len().checked_div(out).unwrap_or(0);
     if groups == 0 || group == 0 {
         return;
     }

@@ -641,9 +641,9 @@ pub fn bin_wedges(wedges: &[WedgeGpu], view_proj: DMat4, size: (u32, u32), lo: D
         }
         // A pixel of margin for rounding; empty or off screen means culled.
         let (x0, y0, x1, y1) = (x0 - 1.0, y0 - 1.0, x1 + 1.0, y1 + 1.0);
-        let range = if corners.is_empty() || !(x0.is_finite() && y0.is_finite() && x1.is_finite() && y1.is_finite()) {
-            None
-        } else if x1 < 0.0 || y1 < 0.0 || x0 > f64::from(size.0) || y0 > f64::from(size.1) {
+        let unbounded = corners.is_empty() || !(x0.is_finite() && y0.is_finite() && x1.is_finite() && y1.is_finite());
+        let off_screen = x1 < 0.0 || y1 < 0.0 || x0 > f64::from(size.0) || y0 > f64::from(size.1);
+        let range = if unbounded || off_screen {
             None
         } else {
             let t = |p: f64, n: u32| ((p.max(0.0) / f64::from(TILE)) as u32).min(n - 1);
