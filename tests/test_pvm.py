@@ -173,6 +173,11 @@ def test_the_chain_follows_the_loop_round_a_plates_corners(renderer: penumbra.Re
     hidden = renderer.render(scene, "hard").visibility == 0
     assert hidden.sum() > 1000
     np.testing.assert_array_equal(chain[hidden], two[hidden])
+    # The walks and the pixels they decided (a closed plate's loop has no junction).
+    stats = renderer.render(scene, "pvm", edges="chain").stats
+    assert 0 < stats["chain_pixels"] <= stats["chain_walks"] < stats["pixels_in_volume"], stats
+    assert stats["chain_pixels"] > 0.9 * stats["chain_walks"], stats
+    assert renderer.render(scene, "pvm", edges="two").stats["chain_walks"] == 0
 
 
 def test_two_edges_of_two_casters_keep_the_nearest_edge(renderer: penumbra.Renderer) -> None:

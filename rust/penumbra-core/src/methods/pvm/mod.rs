@@ -270,7 +270,7 @@ impl Method for PenumbraVolumeMaps {
         let visibility = frame.ctx.screen_texture("pvm::visibility");
         let membership = frame.ctx.screen_texture("pvm::in_volume");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
-            let counter = ctx.counters("pvm::pixels_in_volume", 1, encoder);
+            let counter = ctx.counters("pvm::counters", 3, encoder);
             let flags = u32::from(params.falloff)
                 | (u32::from(params.repairs.centre) << 1)
                 | (u32::from(params.repairs.horizon) << 2)
@@ -303,7 +303,7 @@ impl Method for PenumbraVolumeMaps {
         frame.stat("volume_map_size", i64::from(volume_map));
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("extrusions_outside_light_cone", s.extrusions_outside_cone as i64);
-        frame.counters(&counter, &["pixels_in_volume"]);
+        frame.counters(&counter, &["pixels_in_volume", "chain_walks", "chain_pixels"]);
         frame.intermediate(Intermediate::depth("pvm_volume_depth", &volumes.volume_depth, projection.far()))?;
         if frame.wants_intermediates() {
             let (edge0, edge1) = frame.untimed(|ctx, encoder| self.record_edge_maps(ctx, encoder, &volumes, volume_map));

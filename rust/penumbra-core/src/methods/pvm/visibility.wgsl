@@ -27,7 +27,8 @@ struct EdgePoints {
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
-@group(0) @binding(9) var<storage, read_write> pixels_in_volume: atomic<u32>;
+// pixels_in_volume, chain_walks, chain_pixels (stats, pvm/mod.rs).
+@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>, 3>;
 // With edges = "two": the index + 1 of the volume farthest from the light.
 @group(0) @binding(10) var far_edge_index: texture_2d_array<u32>;
 // The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
@@ -366,18 +367,18 @@ fn walk_loop(view: DiskView, link: u32, forward: bool, stop: u32, start: vec2<f3
 // fan from the centre); a loop walked all round is closed. One edge alone
 // gives Eq. 4.1's half-plane (on the disk facing p rather than the cutting
 // plane). The rest of the scene is left out, as 4.2 leaves it.
-// `fallback` (the k of 4.2, or of edges = "two") is kept where the walk
-// cannot decide: it stops where the loop could still reach the disk (a
-// junction, an edge behind p, the step bound), or its path disagrees with
-// the shadow map at the light's centre (`centre_lit`): another part of the
-// scene decides there, not this loop.
-fn chain_visibility(p: vec3<f32>, index: u32, fallback: f32, centre_lit: bool) -> f32 {
+// It returns -1 where the walk cannot decide, and the k of 4.2 (or of
+// edges = "two") stays: where the walk stops while the loop could still
+// reach the disk (a junction, an edge behind p, the step bound), or its
+// path disagrees with the shadow map at the light's centre (`centre_lit`):
+// another part of the scene decides there, not this loop.
+fn chain_visibility(p: vec3<f32>, index: u32, centre_lit: bool) -> f32 {
     let r = pvm.center.w;
     let l = pvm.center.xyz;
     let e = edges[index];
     let cut = cutting_plane(p, e.h0.xyz, e.h1.xyz);
     if (!(r > 0.0) || dot(cut.n, cut.n) == 0.0) {
-        return fallback;
+        return -1.0;
     }
     let axes = disk_axes(p);
     let w = unit(l - p);
@@ -387,12 +388,12 @@ fn chain_visibility(p: vec3<f32>, index: u32, fallback: f32, centre_lit: bool) -
     let first = seen_segment(view, e.h0.xyz, e.h1.xyz);
     let dir = unit2(first.b - first.a);
     if (!first.ok || dot(dir, dir) == 0.0) {
-        return fallback;
+        return -1.0;
     }
     // The lit side of e's trace on the disk: its cutting plane's normal.
     let lit = vec2<f32>(dot(cut.n, axes.e1), dot(cut.n, axes.e2));
     if (dot(lit, lit) < 1e-12) {
-        return fallback;
+        return -1.0;
     }
     let lit_left = cross2(dir, lit) > 0.0;
     var area = disk_in_triangle(first.a, first.b);
@@ -416,7 +417,7 @@ fn chain_visibility(p: vec3<f32>, index: u32, fallback: f32, centre_lit: bool) -
     // A walk that ends where the loop could still reach the disk leaves
     // the occluder's outline unknown there.
     if (!closed && (ray_meets_disk(tail, tail_dir) || ray_meets_disk(head, head_dir))) {
-        return fallback;
+        return -1.0;
     }
     if (!closed) {
         // The open ends go on along their last edges, out of the disk
@@ -432,7 +433,7 @@ fn chain_visibility(p: vec3<f32>, index: u32, fallback: f32, centre_lit: bool) -
     // |area| and |swept| are a few pi for any path of finite points; the
     // guard keeps an overflow (coordinates beyond about 1e18 radii) out.
     if (!(abs(area) < 1e6 && abs(swept) < 1e6)) {
-        return fallback;
+        return -1.0;
     }
     // The path's left side, in units of the disk's area; a loop walked all
     // round turning clockwise has the disk outside it on its left.
@@ -442,7 +443,7 @@ fn chain_visibility(p: vec3<f32>, index: u32, fallback: f32, centre_lit: bool) -
     let winding = i32(round(swept / (2.0 * PI)));
     let centre_left = winding == 1 || (closed && area < 0.0 && winding == 0);
     if ((centre_left == lit_left) != centre_lit) {
-        return fallback;
+        return -1.0;
     }
     return select(1.0 - left, left, lit_left);
 }
@@ -664,7 +665,12 @@ fn shade(pixel: ScreenPixel) {
                 // generated seed 38: 1.3% of its pixels lit in the umbra), and
                 // the two edges or 4.2's half-plane decide there.
                 if ((pvm.mode.y & 64u) != 0u && ((pvm.mode.y & 2u) == 0u || agrees) && hit.k > 0.0 && hit.k < 1.0 && centre_lit) {
-                    k = chain_visibility(p, index, k, centre_lit);
+                    atomicAdd(&counters[1], 1u);
+                    let chain = chain_visibility(p, index, centre_lit);
+                    if (chain >= 0.0) {
+                        k = chain;
+                        atomicAdd(&counters[2], 1u);
+                    }
                 }
                 // umbra_test = "rim" (beyond 4.2): the centre and the rim hidden, p is in the umbra.
                 if ((pvm.mode.y & 32u) != 0u && !centre_lit && k > 0.0 && rim_hidden(p, q.w, centre_depth)) {
@@ -678,7 +684,7 @@ fn shade(pixel: ScreenPixel) {
                     v = k;
                 }
                 inside = 1.0;
-                atomicAdd(&pixels_in_volume, 1u);
+                atomicAdd(&counters[0], 1u);
             }
             if (horizon) {
                 v = min(v, k_h);
