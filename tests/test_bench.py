@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import penumbra.grid
-from penumbra import bench, cli
+from penumbra import bench, cli, metrics
 from penumbra import mitsuba as pm
 from penumbra.sweep import grid
 from penumbra.errors import ParameterError
@@ -294,6 +294,28 @@ def test_cost_tables_fit_how_the_methods_own_passes_follow_penumbra_and_triangle
     assert "| mitsuba |" not in bench.cost_tables(rows)
     few = bench.cost_tables(rows[:3])
     assert "| m | default | 3 |" in few and "| - | - | - |" in few, "no fit on fewer than 5 scenes"
+
+
+def test_halves_tables_say_which_half_of_the_penumbra_holds_the_error() -> None:
+    rows = []
+    for i, (inner, outer, n_in) in enumerate([(0.2, 0.1, 50.0), (0.1, 0.1, 50.0), (0.3, 0.05, 10.0)]):
+        rows.append({"scene": f"s{i}", "size": "8x8", "method": "m", "label": "default", "penumbra_pixels": 100.0,
+                     "penumbra_inner_pixels": n_in, "visibility_rmse_inner": inner, "visibility_rmse_outer": outer})
+    rows.append({"scene": "s0", "size": "8x8", "method": "old", "label": "default", "penumbra_pixels": 100.0})
+    line = next(l for l in bench.halves_tables(rows).splitlines() if l.startswith("| m |"))
+    cells = [c.strip() for c in line.strip("|").split("|")]
+    # Shares: 50*0.04 / (50*0.04 + 50*0.01) = 0.8; 0.5; 10*0.09 / (10*0.09 + 90*0.0025) = 0.8.
+    assert cells[2:] == ["3", "0.2000", "0.1000", "0.80", "2 of 3"], cells
+    assert "| old |" not in bench.halves_tables(rows), "rows of a run before the halves are left out"
+    assert bench.halves_tables(rows[3:]) == ""
+
+
+def test_penumbra_halves_split_the_region_at_one_half() -> None:
+    gv = np.array([[0.0, 0.01, 0.3, 0.5], [0.7, 0.97, 0.99, 1.0]])
+    inner, outer = metrics.penumbra_halves(gv)
+    assert inner.tolist() == [[False, False, True, False], [False, False, False, False]]
+    assert outer.tolist() == [[False, False, False, True], [True, True, False, False]]
+    assert np.array_equal(inner | outer, metrics.penumbra_region(gv)) and not (inner & outer).any()
 
 
 def test_time_to_error_splits_curves_and_takes_means_or_medians() -> None:

@@ -23,6 +23,7 @@ __all__ = [
     "PENUMBRA_LOW",
     "PENUMBRA_HIGH",
     "penumbra_region",
+    "penumbra_halves",
     "stray_pixels",
     "silhouette_band",
     "lit_mean",
@@ -47,6 +48,17 @@ def _same_shape(a: np.ndarray, b: np.ndarray, what: str) -> None:
 def penumbra_region(gt_visibility: np.ndarray) -> np.ndarray:
     """Pixels whose ground-truth visibility is strictly inside (0.02, 0.98)."""
     return (gt_visibility > PENUMBRA_LOW) & (gt_visibility < PENUMBRA_HIGH)
+
+
+def penumbra_halves(gt_visibility: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The penumbra region split at half visibility: the inner half (ground
+    truth in (0.02, 0.5), mostly where the light's centre is hidden, next to
+    the umbra) and the outer half ([0.5, 0.98), next to the lit side). A method
+    that reasons from the centre's hard shadow decides the two differently
+    (pvm: its inner penumbra is 4.2's half-plane, the outer its edge loop)."""
+    region = penumbra_region(gt_visibility)
+    inner = region & (gt_visibility < 0.5)
+    return inner, region & ~inner
 
 
 def stray_pixels(visibility: np.ndarray, gt_visibility: np.ndarray, geometry: np.ndarray | None = None) -> tuple[int, int]:
@@ -149,12 +161,17 @@ def _metrics(radiance: np.ndarray | None, visibility: np.ndarray, object_id: np.
     gv = gt["visibility"]
     _same_shape(visibility, gv, "visibility")
     region = penumbra_region(gv)
+    inner, outer = penumbra_halves(gv)
     out: dict[str, float] = {
         "visibility_rmse": rmse(visibility, gv),
         "visibility_rmse_penumbra": rmse(visibility, gv, region),
+        # NaN where the half holds no pixel.
+        "visibility_rmse_inner": rmse(visibility, gv, inner),
+        "visibility_rmse_outer": rmse(visibility, gv, outer),
         "visibility_max_error": float(np.abs(visibility.astype(np.float64) - gv).max()),
         "visibility_flip": flip(visibility, gv),
         "penumbra_pixels": float(region.sum()),
+        "penumbra_inner_pixels": float(inner.sum()),
     }
     stray, out_of = stray_pixels(visibility, gv, None if object_id is None else object_id >= 0)
     # Over the pixels fully lit or in umbra; none (an all-penumbra image) counts as no stray pixel.
@@ -172,8 +189,8 @@ def _metrics(radiance: np.ndarray | None, visibility: np.ndarray, object_id: np.
 
 # Metrics whose seed-to-seed value is divided by sqrt(2) to give one ground
 # truth's noise (independent noise adds in quadrature).
-_QUADRATURE = {"visibility_rmse", "visibility_rmse_penumbra", "radiance_rmse_rel", "radiance_mae_rel"}
-_COUNTS = {"penumbra_pixels", "silhouette_pixels_excluded", "stray_fraction"}
+_QUADRATURE = {"visibility_rmse", "visibility_rmse_penumbra", "visibility_rmse_inner", "visibility_rmse_outer", "radiance_rmse_rel", "radiance_mae_rel"}
+_COUNTS = {"penumbra_pixels", "penumbra_inner_pixels", "silhouette_pixels_excluded", "stray_fraction"}
 
 
 def compare_images(
@@ -186,7 +203,9 @@ def compare_images(
     """Every metric of a method's images against ground truth ``gt``:
 
     - ``visibility_rmse`` over all pixels, ``visibility_rmse_penumbra`` over the
-      penumbra region, ``visibility_max_error``, ``visibility_flip`` (mean LDR FLIP);
+      penumbra region, ``visibility_rmse_inner`` and ``visibility_rmse_outer``
+      over its halves (:func:`penumbra_halves`; NaN where a half is empty),
+      ``visibility_max_error``, ``visibility_flip`` (mean LDR FLIP);
     - ``stray_fraction``: :func:`stray_pixels` over the pixels it counts
       (on geometry when ``object_id`` is given);
     - ``radiance_rmse_rel`` and ``radiance_mae_rel``, relative to :func:`lit_mean`,

@@ -24,6 +24,10 @@ Written to ``--out`` (default ``benchmarks/results/<config name>``):
   median time of the shadow map and of the method's own passes, per 1000
   penumbra pixels, and the exponents of a log-log fit of its own passes'
   time against penumbra pixels and triangles over the scenes;
+- ``halves.md``: where each setting's penumbra error lies: the median RMSE
+  over the penumbra's inner half (ground truth under 1/2, mostly where the
+  light's centre is hidden) and its outer half, and the inner half's share
+  of the squared error;
 - ``scaling.csv`` and ``scaling.png``: cost against image size and against
   penumbra area on screen (a light-radius sweep);
 - ``table.md`` (with a ``table`` list of columns): one line per scene and

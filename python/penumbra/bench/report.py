@@ -29,6 +29,7 @@ __all__ = [
     "read_csv",
     "time_to_error_tables",
     "cost_tables",
+    "halves_tables",
     "BUDGETS",
 ]
 
@@ -284,6 +285,38 @@ def suite_tables(rows: list[dict[str, Any]]) -> str:
             over = [float(r["time_over_hard"]) for r in g]
             out.append(f"| {method} | {lab} | {np.median(err):.4f} | {max(err):.4f} | {half} of {len(g)} | {np.median(stray):.2f} | {max(stray):.2f} | "
                        f"{sum(x > 0.5 for x in stray)} | {np.median(over):.2f} | {max(over):.2f} | {'-' if method == 'mitsuba' else _median_ratio(g)} |")
+        out.append("")
+    return "\n".join(out)
+
+
+def halves_tables(rows: list[dict[str, Any]]) -> str:
+    """Where each method's penumbra error lies (``metrics.penumbra_halves``):
+    per size, one line per method and setting, over the scenes, the median
+    RMSE over the inner half of the penumbra (ground truth under 1/2, mostly
+    where the light's centre is hidden) and over the outer half, the median
+    share of the squared penumbra error that lies in the inner half, and on
+    how many scenes that share is over one half. Rows without the halves
+    (results of a run before them) are left out; "" where none has them."""
+    out: list[str] = []
+    by_size: dict[str, list[tuple[str, str, list[dict[str, Any]]]]] = {}
+    for (size, method, lab), group in _groups(rows).items():
+        g = [r for r in group if all(math.isfinite(_number(r, k)) for k in ("visibility_rmse_inner", "visibility_rmse_outer", "penumbra_inner_pixels", "penumbra_pixels"))]
+        if g:
+            by_size.setdefault(size, []).append((method, lab, g))
+    for size, entries in by_size.items():
+        out += [f"### {size}", "",
+                "| method | setting | scenes | inner RMSE median | outer RMSE median | inner share of the squared error, median | scenes where the inner half holds most |",
+                "|---|---|---|---|---|---|---|"]
+        for method, lab, g in entries:
+            inner = [_number(r, "visibility_rmse_inner") for r in g]
+            outer = [_number(r, "visibility_rmse_outer") for r in g]
+            shares = []
+            for r, i, o in zip(g, inner, outer):
+                n_in = _number(r, "penumbra_inner_pixels")
+                n_out = _number(r, "penumbra_pixels") - n_in
+                total = n_in * i * i + n_out * o * o
+                shares.append(n_in * i * i / total if total > 0 else 0.0)
+            out.append(f"| {method} | {lab} | {len(g)} | {np.median(inner):.4f} | {np.median(outer):.4f} | {np.median(shares):.2f} | {sum(x > 0.5 for x in shares)} of {len(g)} |")
         out.append("")
     return "\n".join(out)
 

@@ -23,7 +23,7 @@ import numpy as np
 from penumbra import metrics, scenes
 from penumbra import mitsuba as pm
 from penumbra.bench.config import BenchConfig, expand, label
-from penumbra.bench.report import ERROR, aggregate, cost_tables, markdown_table, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, time_to_error_tables, what_to_use, write_csv
+from penumbra.bench.report import ERROR, aggregate, cost_tables, halves_tables, markdown_table, pareto_table, plot_pareto, plot_scaling, ratio_tables, suite_tables, time_at_error, time_to_error_tables, what_to_use, write_csv
 from penumbra.errors import GpuFeatureError, ParameterError, PenumbraError, SceneError
 from penumbra.grid import result_columns
 from penumbra.render import Renderer, RenderResult, method_info, methods
@@ -321,6 +321,9 @@ def write_reports(cfg: BenchConfig, out: Path, rows: list[dict[str, Any]]) -> li
         "ratios.md": ratio_tables(main_rows, summary),
         "cost.md": cost_tables(rows),
     }
+    halves = halves_tables(rows)
+    if halves:
+        reports["halves.md"] = halves
     if cfg.table:
         reports["table.md"] = markdown_table(rows, cfg.table)
     if cfg.time_to_error:
