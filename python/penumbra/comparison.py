@@ -95,7 +95,7 @@ PAPER: dict[str, dict[str, Any]] = {
     # Cournia 4.1.3 and 4.2: one edge per texel of a map-sized volume map,
     # read at the pixel's texel, and the 3k^2 - 2k^3 interpolant of the
     # disk fraction.
-    "pvm": {"falloff": True, "edges": "one", "volume_map_size": "map", "lookup": "texel", "umbra_test": "none"},
+    "pvm": {"falloff": True, "edges": "one", "volume_map_size": "map", "lookup": "texel", "umbra_test": "none", "map_samples": 0},
     "pcss": {"blocker_test": "plane", "search": "uniform", "blocker_depth": "mean", "horizon": False},
 }
 
