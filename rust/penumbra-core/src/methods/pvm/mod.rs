@@ -93,6 +93,10 @@ pub struct PvmParams {
     /// shadow map leaves seen, plus 1/16 (`map_fraction` and `MAP_MARGIN`
     /// in visibility.wgsl); 0 leaves the edge's k alone (4.2).
     pub map_samples: u32,
+    /// `map_bound = "both"` (beyond 4.2; the default): where the shadow map
+    /// sees the light's centre, the visibility is also at least the map's
+    /// fraction less 1/16; `"upper"` bounds it from above only.
+    pub map_bound_both: bool,
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`).
     pub repairs: Repairs,
@@ -213,6 +217,20 @@ impl MethodParams for PvmParams {
                 256,
                 "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1/16; 0: the edge's k alone (4.2)",
             ),
+            // Beyond 4.2 (issue 28): where the map sees the light's centre,
+            // 4.2's half-plane (or the two edges) may hide more of the light
+            // than the caster does (the far tip of a grazing shadow, where
+            // the caster ends along its edge), and the outer penumbra came
+            // out too dark (halves.md). Where the map hides the centre the
+            // rays are not trusted to raise k: a surface the map cannot see
+            // (a boot's toe seen from below, generated seed 38) leaves them
+            // seen, and the umbra would be lit (docs/methods/pvm.md).
+            ParamSpec::choice(
+                "map_bound",
+                "both",
+                &["upper", "both"],
+                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1/16; both, and where the shadow map sees the light's centre, at least the fraction less 1/16",
+            ),
             OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
@@ -234,6 +252,7 @@ impl MethodParams for PvmParams {
             rim_test: p.choice("umbra_test") == "rim",
             // Within [0, 256] (the spec's range).
             map_samples: p.int("map_samples").clamp(0, 256) as u32,
+            map_bound_both: p.choice("map_bound") == "both",
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
         })
@@ -292,14 +311,15 @@ impl Method for PenumbraVolumeMaps {
         let visibility = frame.ctx.screen_texture("pvm::visibility");
         let membership = frame.ctx.screen_texture("pvm::in_volume");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
-            let counter = ctx.counters("pvm::counters", 4, encoder);
+            let counter = ctx.counters("pvm::counters", 5, encoder);
             let flags = u32::from(params.falloff)
                 | (u32::from(params.repairs.centre) << 1)
                 | (u32::from(params.repairs.horizon) << 2)
                 | (u32::from(volumes.far_edge_index.is_some()) << 3)
                 | (u32::from(params.lookup_neighbours) << 4)
                 | (u32::from(params.rim_test) << 5)
-                | (u32::from(params.chain_edges) << 6);
+                | (u32::from(params.chain_edges) << 6)
+                | (u32::from(params.map_bound_both) << 7);
             let mut test = params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags);
             test.mode[2] = params.map_samples;
             let uniforms = ctx.parameters("pvm::visibility_uniforms", &test);
@@ -324,7 +344,7 @@ impl Method for PenumbraVolumeMaps {
         frame.stat("volume_map_size", i64::from(volume_map));
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("extrusions_outside_light_cone", s.extrusions_outside_cone as i64);
-        frame.counters(&counter, &["pixels_in_volume", "chain_walks", "chain_pixels", "map_bounded_pixels"]);
+        frame.counters(&counter, &["pixels_in_volume", "chain_walks", "chain_pixels", "map_bounded_pixels", "map_raised_pixels"]);
         frame.intermediate(Intermediate::depth("pvm_volume_depth", &volumes.volume_depth, projection.far()))?;
         if frame.wants_intermediates() {
             let (edge0, edge1) = frame.untimed(|ctx, encoder| self.record_edge_maps(ctx, encoder, &volumes, volume_map));

@@ -1,5 +1,6 @@
 #import shaders/receiver.wgsl
 #import passes/shadow_test.wgsl
+#import passes/map_rays.wgsl
 #import shaders/per_pixel.wgsl
 
 // PVM pass 3 (Cournia 4.2, listing 4.2): light visibility per camera pixel.
@@ -28,23 +29,12 @@ struct EdgePoints {
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
 // pixels_in_volume, chain_walks, chain_pixels, map_bounded_pixels (stats, pvm/mod.rs).
-@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>, 5>;
 // With edges = "two": the index + 1 of the volume farthest from the light.
 @group(0) @binding(10) var far_edge_index: texture_2d_array<u32>;
 // The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
 @group(0) @binding(11) var object_map: texture_2d_array<u32>;
 @group(0) @binding(12) var<storage, read> mesh_objects: array<u32>;
-
-// v / |v| without overflow or underflow for any finite v (zero for zero):
-// scaled by its largest component first, so that the squares stay near 1.
-fn unit(v: vec3<f32>) -> vec3<f32> {
-    let big = max(max(abs(v.x), abs(v.y)), abs(v.z));
-    if (big == 0.0) {
-        return v;
-    }
-    let w = v / big;
-    return w / length(w);
-}
 
 // The cutting plane of an edge through a receiver (4.2): its unit normal n,
 // pointing away from the occluder, and the signed distance s of the light's
@@ -149,20 +139,6 @@ fn half_planes_fraction(a1: vec2<f32>, c1: f32, a2: vec2<f32>, c2: f32) -> f32 {
     return 0.0;
 }
 
-// Two unit axes of the light's disk as a receiver p sees it: perpendicular
-// to unit(l - p), which is non-zero (no surface touches the light), and to
-// each other (the helper axis is at most 0.7 along it).
-struct DiskAxes {
-    e1: vec3<f32>,
-    e2: vec3<f32>,
-};
-
-fn disk_axes(p: vec3<f32>) -> DiskAxes {
-    let w = unit(pvm.center.xyz - p);
-    let e1 = unit(cross(w, select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(w.x) > 0.7)));
-    return DiskAxes(e1, cross(w, e1));
-}
-
 // Beyond 4.2 (edges = "two", issue 28): the light that two silhouette
 // edges A and B leave a receiver p in both their penumbrae. Each edge's
 // cutting plane cuts the light's disk (seen from p) into a lit side of
@@ -190,7 +166,7 @@ fn two_edge_visibility(p: vec3<f32>, depth: f32, a: EdgePoints, b: EdgePoints) -
     }
     // The light's disk as p sees it, its lines the cutting planes' traces,
     // the lit sides towards each n.
-    let disk = disk_axes(p);
+    let disk = disk_axes(pvm, p);
     let pa = vec2<f32>(dot(ca.n, disk.e1), dot(ca.n, disk.e2));
     let pb = vec2<f32>(dot(cb.n, disk.e1), dot(cb.n, disk.e2));
     // A cutting plane nearly parallel to w has no trace on the disk to speak
@@ -380,7 +356,7 @@ fn chain_visibility(p: vec3<f32>, index: u32, centre_lit: bool) -> f32 {
     if (!(r > 0.0) || dot(cut.n, cut.n) == 0.0) {
         return -1.0;
     }
-    let axes = disk_axes(p);
+    let axes = disk_axes(pvm, p);
     let w = unit(l - p);
     // No surface touches the light: dist > r > 0.
     let dist = dot(l - p, w);
@@ -531,37 +507,6 @@ fn volume_at(p: vec3<f32>, depth: f32, t: vec2<i32>, layer: i32, centre_lit: boo
     return VolumeHit(true, holds, agrees, index, k, d);
 }
 
-// Whether the shadow map hides the ray from p (at light depth `depth`) to
-// the light point `goal`, the search starting at light depth `d_start`
-// (a surface thought to lie on the ray): at the light depth d of the last
-// surface found, the map's texel under the ray's point holds the first
-// surface m on the centre's ray there; the ray is hidden where m lies
-// within 2 texels of d (the surface is on it), and seen where m lies
-// beyond p or within 2 texels in front of it (p's own surface); else
-// d = m, at most 16 times (then taken for seen).
-fn ray_hidden(p: vec3<f32>, depth: f32, d_start: f32, goal: vec3<f32>) -> bool {
-    let d_goal = light_view_depth(pvm.light_space, goal);
-    // Surfaces within 2 texels of p's depth are p's own (the ray leaves
-    // p's surface there): the far side of the settling tolerance below.
-    let near_p = depth - 2.0 * light_texel_size(pvm.light_space, depth);
-    var d = d_start;
-    for (var step = 0; step < 16; step++) {
-        // Light depth is affine along a ray in a frustum's view (nearly
-        // so in a cube face's); a light point lies nearer the light than any
-        // surface (no surface touches the light), so depth - d_goal > 0.
-        let t = clamp((depth - d) / max(depth - d_goal, 1e-30), 0.0, 1.0);
-        let m = map_depth(pvm, shadow_map, p + t * (goal - p));
-        if (!(m < near_p)) {
-            return false;
-        }
-        if (abs(m - d) <= 2.0 * light_texel_size(pvm.light_space, d)) {
-            return true;
-        }
-        d = m;
-    }
-    return false;
-}
-
 // umbra_test = "rim" (beyond 4.2): whether the light's rim is hidden from
 // p (at light depth `depth`) as its centre is (by a surface at light depth
 // d_s, the shadow map's at p's texel): the rays from p to 8 points of the
@@ -581,61 +526,15 @@ fn rim_hidden(p: vec3<f32>, depth: f32, d_s: f32) -> bool {
     if (r * (depth - d_s) < 2.0 * light_texel_size(pvm.light_space, d_s) * depth) {
         return false;
     }
-    let disk = disk_axes(p);
+    let disk = disk_axes(pvm, p);
     for (var i = 0; i < 8; i++) {
         let a = f32(i) * (PI / 4.0);
-        if (!ray_hidden(p, depth, d_s, l + r * (cos(a) * disk.e1 + sin(a) * disk.e2))) {
+        if (!ray_hidden(pvm, shadow_map, p, depth, d_s, l + r * (cos(a) * disk.e1 + sin(a) * disk.e2))) {
             return false;
         }
     }
     return true;
 }
-
-// map_samples = n (beyond 4.2, issue 28): the fraction of n points of the
-// light's disk as p sees it (an equal-area Vogel spiral in `disk_axes`'
-// frame: point i at radius sqrt((i + 1/2) / n), turned by the golden
-// angle, each standing for 1/n of the disk) whose rays from p the shadow
-// map leaves seen (`ray_hidden`, from light depth `d_start`), plus
-// MAP_MARGIN, at most 1. The edge's k counts one occluder (its half-plane,
-// its two edges or its loop); the map sees every surface nearer the light
-// that its texels hold, but not what lies behind them. Hidden light is
-// hidden whichever sees it: the visibility is at most this.
-// The points stop, and 1 is returned, once the rays left cannot take the
-// fraction below k (`k`): the result is only ever compared with it.
-fn map_fraction(p: vec3<f32>, depth: f32, d_start: f32, n: u32, k: f32) -> f32 {
-    let l = pvm.center.xyz;
-    let r = pvm.center.w;
-    let disk = disk_axes(p);
-    // n >= 1 here (the caller checks). The fraction falls below k only
-    // where more than `needed` rays are hidden.
-    let count = f32(n);
-    let needed = count * (1.0 + MAP_MARGIN - k);
-    var seen = 0.0;
-    for (var i = 0u; i < n; i++) {
-        let radius = sqrt((f32(i) + 0.5) / count);
-        let a = f32(i) * GOLDEN_ANGLE;
-        if (!ray_hidden(p, depth, d_start, l + r * radius * (cos(a) * disk.e1 + sin(a) * disk.e2))) {
-            seen += 1.0;
-            // Hidden at most: those so far and every ray left.
-            if (count - seen <= needed) {
-                return 1.0;
-            }
-        }
-    }
-    return min(seen / count + MAP_MARGIN, 1.0);
-}
-
-// What the map's fraction must fall below k by before it lowers it: the
-// points' own error where a boundary crosses their cells and the map's
-// texel rounding at the occluder's outline (a ray within half a texel of
-// it counted on the wrong side). Under a straight edge, where Eq. 4.1 is
-// exact (tests/test_pvm.py's bar), 32 points and 1/32 lowered k by up to
-// 0.038; with 1/16, 32 points lower it by at most 0.007 and 16 (the
-// default) not at all.
-const MAP_MARGIN: f32 = 0.0625;
-
-// pi (3 - sqrt(5)): the Vogel spiral's turn per point.
-const GOLDEN_ANGLE: f32 = 2.3999632;
 
 // Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
 fn shade(pixel: ScreenPixel) {
@@ -737,18 +636,23 @@ fn shade(pixel: ScreenPixel) {
                         k = k * k * (3.0 - 2.0 * k);
                     }
                     // map_samples (beyond 4.2): at most what the map's rays
-                    // leave seen. Their search starts at the surface hiding
-                    // the centre, or where the centre is seen at the edge.
-                    if (pvm.mode.z > 0u && k > MAP_MARGIN) {
+                    // leave seen, and with map_bound = "both", where the map
+                    // sees the centre, at least that. Their search starts at
+                    // the surface hiding the centre, or where the centre is
+                    // seen at the edge.
+                    let lower = (pvm.mode.y & 128u) != 0u && centre_lit;
+                    if (pvm.mode.z > 0u && (k > MAP_MARGIN || lower)) {
                         var d_start = centre_depth;
                         if (centre_lit) {
                             d_start = light_view_depth(pvm.light_space, 0.5 * (edge.h0.xyz + edge.h1.xyz));
                         }
-                        let bound = map_fraction(p, q.w, d_start, pvm.mode.z, k);
-                        if (bound < k) {
-                            k = bound;
+                        let bounded = map_bound(pvm, shadow_map, p, q.w, d_start, pvm.mode.z, k, lower);
+                        if (bounded < k) {
                             atomicAdd(&counters[3], 1u);
+                        } else if (bounded > k) {
+                            atomicAdd(&counters[4], 1u);
                         }
+                        k = bounded;
                     }
                     v = k;
                 }

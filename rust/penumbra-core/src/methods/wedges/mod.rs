@@ -57,6 +57,9 @@ pub use geometry::{bin_wedges, coverage_bounds, coverage_term, penumbra_wedges, 
 
 /// The values of `repairs`, cumulative in the order docs/methods/wedges.md
 /// measures them; "all" adds the horizon to the last.
+/// `map_samples`' default.
+pub const MAP_SAMPLES_DEFAULT: i64 = 16;
+
 pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "hidden", "cone+hidden", "cone+horizon"];
 
 /// The wedges and their screen bins (pass 2), as the pass cache keeps them.
@@ -85,6 +88,14 @@ pub struct WedgesParams {
     /// Whether the tile cull (`tile_cull.wgsl`) skips wedges whose support
     /// holds no point of an 8 x 8 block of pixels.
     pub tile_cull: bool,
+    /// `map_samples = n` (beyond both papers): inside wedges, the visibility
+    /// is at most the fraction of n points of the light's disk whose rays
+    /// the shadow map leaves seen, plus 1/16, as pvm's (`map_fraction` in
+    /// passes/map_rays.wgsl); 0 leaves the wedges' sum alone.
+    pub map_samples: u32,
+    /// `map_bound = "both"`: where the map sees the light's centre, also at
+    /// least that fraction less 1/16.
+    pub map_bound_both: bool,
 }
 
 /// How the light intensity s inside a wedge is computed.
@@ -140,7 +151,7 @@ crate::gpu_type! {
 /// Names of the visibility pass's counters, in order: pixels inside some
 /// wedge, and binned (tile, wedge) entries the tile cull kept (of
 /// `binned_wedge_tiles`).
-pub const COUNTER_NAMES: &[&str] = &["pixels_in_wedge", "wedge_tiles_kept"];
+pub const COUNTER_NAMES: &[&str] = &["pixels_in_wedge", "map_bounded_pixels", "map_raised_pixels", "wedge_tiles_kept"];
 
 /// Pass 2's output.
 pub struct WedgeBuffers {
@@ -207,6 +218,23 @@ impl MethodParams for WedgesParams {
                 "skip, per 8 x 8 pixels, the binned wedges whose support holds none of their points (beyond the papers: the same image to within float rounding, the visibility pass in 0.42-0.76 of its time on generated scenes at 256x256: docs/methods/wedges.md); false: every binned wedge is evaluated at every pixel of its tile",
             ),
             ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
+            // Beyond both papers (issue 28), as pvm's map bound: the wedges
+            // sum one silhouette's terms, seen from the light's centre, and
+            // where other surfaces hide more of the light, or less, the sum
+            // is wrong (docs/methods/wedges.md).
+            ParamSpec::int(
+                "map_samples",
+                MAP_SAMPLES_DEFAULT,
+                0,
+                256,
+                "inside wedges, points of the light's disk whose rays from the pixel are followed through the shadow map (as pvm's): the visibility is at most the fraction seen plus 1/16; 0: the wedges' sum alone (both papers)",
+            ),
+            ParamSpec::choice(
+                "map_bound",
+                "both",
+                &["upper", "both"],
+                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1/16; both, and where the shadow map sees the light's centre, at least the fraction less 1/16",
+            ),
             OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
@@ -234,6 +262,9 @@ impl MethodParams for WedgesParams {
             overlap_gate: p.choice("overlap") == "gate",
             independent_occluders: p.choice("occluders") == "independent",
             tile_cull: p.bool("tile_cull"),
+            // Within [0, 256] (the spec's range).
+            map_samples: p.int("map_samples").clamp(0, 256) as u32,
+            map_bound_both: p.choice("map_bound") == "both",
         })
     }
 }
@@ -283,7 +314,7 @@ impl Method for PenumbraWedges {
         let hard = frame.ctx.screen_texture("wedges::hard");
         let intensity = frame.ctx.screen_texture("wedges::intensity");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
-            let counter = ctx.counters("wedges::pixels_in_wedge", 1, encoder);
+            let counter = ctx.counters("wedges::pixels_in_wedge", 3, encoder);
             let kept = ctx.counters("wedges::tiles_kept", 1, encoder);
             let coverage = params.intensity == Intensity::Coverage;
             let flags = u32::from(params.falloff && !coverage)
@@ -291,8 +322,11 @@ impl Method for PenumbraWedges {
                 | (u32::from(params.hard_term == HardTerm::LitSide) << 2)
                 | (u32::from(coverage) << 3)
                 | (u32::from(params.overlap_gate) << 4)
-                | (u32::from(params.independent_occluders) << 5);
-            let test = ctx.parameters("wedges::shadow_test", &params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0));
+                | (u32::from(params.independent_occluders) << 5)
+                | (u32::from(params.map_bound_both) << 6);
+            let mut shadow_test = params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0);
+            shadow_test.mode[2] = params.map_samples;
+            let test = ctx.parameters("wedges::shadow_test", &shadow_test);
             let settings = ctx.parameters("wedges::settings", &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count] });
             // The tile cull: which binned wedges hold no pixel of their tile.
             let keep = ctx.buffer("wedges::tile_keep", 16 * u64::from(wedges.binned.max(1)), wgpu::BufferUsages::STORAGE);
@@ -329,8 +363,8 @@ impl Method for PenumbraWedges {
         frame.stat("silhouette_junction_vertices", s.junction_vertices as i64);
         frame.stat("side_line_fallbacks", s.side_fallbacks as i64);
         frame.stat("binned_wedge_tiles", s.binned as i64);
-        frame.counters(&counter.0, &COUNTER_NAMES[..1]);
-        frame.counters(&counter.1, &COUNTER_NAMES[1..]);
+        frame.counters(&counter.0, &COUNTER_NAMES[..3]);
+        frame.counters(&counter.1, &COUNTER_NAMES[3..]);
         frame.intermediate(Intermediate::color("wedges_hard", &hard, 1))?;
         frame.intermediate(Intermediate::color("wedges_intensity", &intensity, 1))?;
         Ok(MethodOutput { visibility })

@@ -1,5 +1,6 @@
 #import shaders/receiver.wgsl
 #import passes/shadow_test.wgsl
+#import passes/map_rays.wgsl
 #import shaders/per_pixel.wgsl
 
 // Method `wedges` (Akenine-Möller & Assarsson 2002): light intensity per
@@ -29,8 +30,8 @@ struct Wedge {
 struct WedgeSettings {
     // x: tile size in pixels; y: tiles per row; z: flags (bit 0: falloff,
     // bit 1: repair "horizon", bit 2: hard_term "lit_side", bit 3: intensity
-    // "coverage", bit 4: overlap "gate", bit 5: occluders "independent");
-    // w: wedge count.
+    // "coverage", bit 4: overlap "gate", bit 5: occluders "independent",
+    // bit 6: map_bound "both"); w: wedge count. wedge_test.mode.z: map_samples.
     tiles: vec4<u32>,
 };
 
@@ -43,7 +44,8 @@ struct WedgeSettings {
 @group(0) @binding(8) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var hard_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(10) var intensity_out: texture_storage_2d<r32float, write>;
-@group(0) @binding(11) var<storage, read_write> pixels_in_wedge: atomic<u32>;
+// pixels_in_wedge, map_bounded_pixels, map_raised_pixels (COUNTER_NAMES in mod.rs).
+@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>, 3>;
 // The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
 @group(0) @binding(12) var object_map: texture_2d_array<u32>;
 @group(0) @binding(13) var<storage, read> mesh_objects: array<u32>;
@@ -317,6 +319,7 @@ fn shade(pixel: ScreenPixel) {
             var objects = Objects(1.0, 1.0, false);
             var object = -1.0;
             var object_terms = 0.0;
+            var edge_depth = 3.4e38;
             for (var i = start; i < end; i = i + 1u) {
                 if (tile_keep[4u * i + quarter] == 0u) {
                     continue;
@@ -368,6 +371,9 @@ fn shade(pixel: ScreenPixel) {
                     }
                     object_terms = object_terms + term.x;
                     inside = true;
+                    // The holding edge nearest the light: where the map
+                    // sees the centre, the map bound's rays start there.
+                    edge_depth = min(edge_depth, light_view_depth(wedge_test.light_space, 0.5 * (wedges[index].a.xyz + wedges[index].b.xyz)));
                     let d = dot(quad, p - wedges[index].a.xyz);
                     // The side the map is read on: h(p)'s, or always the lit one.
                     let lit = d > 0.0 || (settings.tiles.z & 4u) != 0u;
@@ -388,7 +394,7 @@ fn shade(pixel: ScreenPixel) {
             hard = select(0.0, 1.0, q.w <= map_depth(wedge_test, shadow_map, q.xyz));
             intensity = hard + terms;
             if (inside) {
-                atomicAdd(&pixels_in_wedge, 1u);
+                atomicAdd(&counters[0], 1u);
             }
             v = clamp(intensity, 0.0, 1.0);
             if (independent && inside) {
@@ -402,6 +408,25 @@ fn shade(pixel: ScreenPixel) {
                     v = select(0.0, objects.uncover * objects.leave, objects.any_uncover);
                 }
                 intensity = v;
+            }
+            // map_samples (beyond both papers, issue 28): at most what the
+            // map's rays leave seen, and with map_bound = "both", where the
+            // map sees the centre, at least that (pvm's bound). Their search
+            // starts at the surface hiding the centre, or at the holding
+            // edge nearest the light.
+            let lower = (settings.tiles.z & 64u) != 0u && hard > 0.0;
+            if (inside && wedge_test.mode.z > 0u && (v > MAP_MARGIN || lower)) {
+                var d_start = map_depth(wedge_test, shadow_map, q.xyz);
+                if (hard > 0.0) {
+                    d_start = edge_depth;
+                }
+                let bounded = map_bound(wedge_test, shadow_map, p, q.w, d_start, wedge_test.mode.z, v, lower);
+                if (bounded < v) {
+                    atomicAdd(&counters[1], 1u);
+                } else if (bounded > v) {
+                    atomicAdd(&counters[2], 1u);
+                }
+                v = bounded;
             }
             if (horizon) {
                 v = min(v, k_h);
