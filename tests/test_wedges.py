@@ -269,19 +269,18 @@ WEDGES_MEASURED: dict[str, dict[str, float]] = {
     # "defaults" (coverage, overlap=gate and the map bound; no stray pixel)
     # measured the same way for issue 28's map bound: without the bound
     # (map_samples=0) 0.0024, 0.0404, 0.0029, 0.0917, 0.0951, 0.0838,
-    # 0.0480, 0.0672, 0.0180 in this order (two of the cubes' rise, by at
-    # most 0.0015: the bound's rays a little coarser than the exact
-    # coverage at their corners). "interpolation" and "falloff" are the values of the
+    # 0.0480, 0.0672, 0.0180 in this order (none rises by more than
+    # 0.0001). "interpolation" and "falloff" are the values of the
     # earlier defaults (the 2002 interpolation, overlap=sum, no map bound).
-    "cube.obj close r=0.3": {"defaults": 0.0033, "interpolation": 0.0326, "falloff": 0.0261},
-    "cube.obj close r=0.8": {"defaults": 0.0381, "interpolation": 0.0823, "falloff": 0.0805},
-    "cube.obj wide_floor r=0.3": {"defaults": 0.0044, "interpolation": 0.0568, "falloff": 0.0438},
-    "spot.obj close r=0.3": {"defaults": 0.0506, "interpolation": 0.1630, "falloff": 0.1249},
-    "spot.obj close r=0.8": {"defaults": 0.0562, "interpolation": 0.2144, "falloff": 0.1615},
-    "spot.obj wide_floor r=0.3": {"defaults": 0.0649, "interpolation": 0.1764, "falloff": 0.1354},
-    "teapot-mcguire-closed.obj close r=0.3": {"defaults": 0.0197, "interpolation": 0.0811, "falloff": 0.0663},
-    "teapot-mcguire-closed.obj close r=0.8": {"defaults": 0.0555, "interpolation": 0.1498, "falloff": 0.1163},
-    "teapot-mcguire-closed.obj wide_floor r=0.3": {"defaults": 0.0170, "interpolation": 0.1139, "falloff": 0.0817},
+    "cube.obj close r=0.3": {"defaults": 0.0025, "interpolation": 0.0326, "falloff": 0.0261},
+    "cube.obj close r=0.8": {"defaults": 0.0397, "interpolation": 0.0823, "falloff": 0.0805},
+    "cube.obj wide_floor r=0.3": {"defaults": 0.0029, "interpolation": 0.0568, "falloff": 0.0438},
+    "spot.obj close r=0.3": {"defaults": 0.0625, "interpolation": 0.1630, "falloff": 0.1249},
+    "spot.obj close r=0.8": {"defaults": 0.0680, "interpolation": 0.2144, "falloff": 0.1615},
+    "spot.obj wide_floor r=0.3": {"defaults": 0.0708, "interpolation": 0.1764, "falloff": 0.1354},
+    "teapot-mcguire-closed.obj close r=0.3": {"defaults": 0.0283, "interpolation": 0.0811, "falloff": 0.0663},
+    "teapot-mcguire-closed.obj close r=0.8": {"defaults": 0.0579, "interpolation": 0.1498, "falloff": 0.1163},
+    "teapot-mcguire-closed.obj wide_floor r=0.3": {"defaults": 0.0180, "interpolation": 0.1139, "falloff": 0.0817},
 }
 WEDGES_CONFIGS: dict[str, dict[str, object]] = {"defaults": {}, "interpolation": INTERPOLATION, "falloff": INTERPOLATION | {"falloff": True}}
 

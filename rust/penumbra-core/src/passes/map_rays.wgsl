@@ -60,6 +60,39 @@ fn ray_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f
     return false;
 }
 
+// map_march = k (beyond the papers, issue 28): a second look at a ray that
+// `ray_hidden` leaves seen. Its search jumps from surface to surface as the
+// map shows them from `d_start`, and passes by a surface that lies between
+// p and the one it starts at, or that its jumps step over (the rays' seen
+// fraction came out high: in the inner penumbra of the generated scenes
+// by 0.045 at the median). Here the ray is sampled at k light depths,
+// evenly from 2 texels in front of p (p's own surface, as in `ray_hidden`)
+// to the map's near plane (or the light point, if nearer p), and it is
+// hidden where a sample lies behind the map's surface by at most a step
+// and 2 texels: a surface taken as a sheet that thick, which the samples
+// cannot step over.
+fn ray_marched_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f32, goal: vec3<f32>, k: u32) -> bool {
+    let d_goal = light_view_depth(t.light_space, goal);
+    let z0 = depth - 2.0 * light_texel_size(t.light_space, depth);
+    let z1 = max(t.light_space.depth.x, d_goal);
+    // No room between p's surface and the near plane: nothing to hide it.
+    if (!(z1 < z0) || k == 0u) {
+        return false;
+    }
+    let dz = (z0 - z1) / f32(k);
+    for (var i = 0u; i < k; i++) {
+        let z = z0 - (f32(i) + 0.5) * dz;
+        // Light depth is affine along the ray (as in `ray_hidden`), and
+        // depth - d_goal > 0.
+        let s = clamp((depth - z) / max(depth - d_goal, 1e-30), 0.0, 1.0);
+        let m = map_depth(t, map, p + s * (goal - p));
+        if (m <= z && z <= m + dz + 2.0 * light_texel_size(t.light_space, z)) {
+            return true;
+        }
+    }
+    return false;
+}
+
 // map_samples = n (beyond 4.2, issue 28): the fraction of n points of the
 // light's disk as p sees it (an equal-area Vogel spiral in `disk_axes`'
 // frame: point i at radius sqrt((i + 1/2) / n), turned by the golden
@@ -69,25 +102,28 @@ fn ray_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f
 // silhouette's occluder (pvm's half-plane, two edges or loop, the wedges'
 // sum); the map sees every surface nearer the light that its texels hold,
 // but not what lies behind them. Hidden light is hidden whichever sees it:
-// k is at most the fraction plus MAP_MARGIN. With `lower` (map_bound =
-// "both", where the map sees the light's centre) it is also at least the
-// fraction less MAP_MARGIN_LOWER.
+// k is at most the fraction plus `map_margin(n)`. With `lower` (map_bound
+// = "both", where the map sees the light's centre) it is also at least
+// the fraction less that. With `march` > 0 (map_march) a ray
+// `ray_hidden` leaves seen is looked at again (`ray_marched_hidden`).
 // The points stop once the rays left cannot take the fraction out of k's
 // band: the result is then k.
-fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f32, d_start: f32, n: u32, k: f32, lower: bool) -> f32 {
+fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f32, d_start: f32, n: u32, k: f32, lower: bool, march: u32) -> f32 {
     let l = t.center.xyz;
     let r = t.center.w;
     let disk = disk_axes(t, p);
     // n >= 1 here (the caller checks). Seen rays at least `lo`: the upper
     // bound leaves k; at most `hi`: the lower bound does.
     let count = f32(n);
-    let lo = count * (k - MAP_MARGIN);
-    let hi = select(2.0 * count, count * (k + MAP_MARGIN_LOWER), lower);
+    let margin = map_margin(n);
+    let lo = count * (k - margin);
+    let hi = select(2.0 * count, count * (k + margin), lower);
     var seen = 0.0;
     for (var i = 0u; i < n; i++) {
         let radius = sqrt((f32(i) + 0.5) / count);
         let a = f32(i) * GOLDEN_ANGLE;
-        if (!ray_hidden(t, map, p, depth, d_start, l + r * radius * (cos(a) * disk.e1 + sin(a) * disk.e2))) {
+        let goal = l + r * radius * (cos(a) * disk.e1 + sin(a) * disk.e2);
+        if (!ray_hidden(t, map, p, depth, d_start, goal) && !ray_marched_hidden(t, map, p, depth, goal, march)) {
             seen += 1.0;
         }
         // Seen at the end: between these and every ray left besides.
@@ -97,28 +133,26 @@ fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f3
     }
     let f = seen / count;
     if (lower) {
-        return clamp(k, f - MAP_MARGIN_LOWER, f + MAP_MARGIN);
+        return clamp(k, f - margin, f + margin);
     }
-    return min(k, f + MAP_MARGIN);
+    return min(k, f + margin);
 }
 
-// What the map's fraction must fall below k by before it lowers it: the
-// points' own error where a boundary crosses their cells and the map's
-// texel rounding at the occluder's outline (a ray within half a texel of
-// it counted on the wrong side). Under a straight edge, where Eq. 4.1 is
-// exact (tests/test_pvm.py's bar), 32 points and 1/32 lowered k by up to
-// 0.038; with 1/16, 32 points lower it by at most 0.007 and 16 (the
-// default) not at all.
-const MAP_MARGIN: f32 = 0.0625;
-
-// What the map's fraction must exceed k by before it raises it (map_bound
-// = "both"): more than MAP_MARGIN, as `ray_hidden` misses some occluders
-// (its search follows the surfaces the map shows from `d_start`, and a ray
-// that passes them by reads as seen), so the fraction errs high. Under a
-// straight edge, where Eq. 4.1 and the wedges' coverage are exact
-// (long_edge_scene in tests/test_pvm.py, radii 0.02-1.5), 1/16 raised 160
-// pixels by up to 0.0175 at radii 0.3 and 0.5; 3/32 raises none.
-const MAP_MARGIN_LOWER: f32 = 0.09375;
+// How far the fraction of n spiral points may lie from k before it moves
+// it: the points' own error under one straight edge. A straight line
+// through the disk leaves on its lit side a fraction of the points that
+// differs from the segment's area by up to 0.443, 0.227, 0.143, 0.081,
+// 0.050, 0.036 and 0.022 for n = 4, 8, 16, 32, 64, 128 and 256 (over
+// every direction and offset of the line; tests/test_map_rays.py computes
+// them), all under 1.2 n^-0.7. Under a lone straight edge, where Eq. 4.1
+// and the wedges' coverage are exact, a margin below this moves pixels by
+// whatever the points miss: 1/16 at n = 16 (the bound's margin until this
+// was measured) lowered a plate's exact k by up to 0.103 at 2836 pixels
+// and streaked its penumbra (tests/test_pvm.py's straight edges).
+fn map_margin(n: u32) -> f32 {
+    // n >= 1 (the callers check): pow of a positive base.
+    return 1.2 * pow(f32(n), -0.7);
+}
 
 // pi (3 - sqrt(5)): the Vogel spiral's turn per point.
 const GOLDEN_ANGLE: f32 = 2.3999632;

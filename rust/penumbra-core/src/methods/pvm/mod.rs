@@ -57,6 +57,9 @@ pub const EDGE_POINT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Fl
 pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "cone", "cone+hidden", "cone+hidden+centre"];
 
 /// The penumbra volume map (pass 2), as the pass cache keeps it.
+/// `map_march`'s default (docs/methods/pvm.md).
+pub const PVM_MAP_MARCH_DEFAULT: i64 = 8;
+
 pub const PENUMBRA_VOLUMES: CachedPass = CachedPass { name: "penumbra_volumes", capacity: 1 };
 
 #[derive(Debug, Clone, PartialEq)]
@@ -90,13 +93,17 @@ pub struct PvmParams {
     pub rim_test: bool,
     /// `map_samples = n` (beyond 4.2): inside a volume, the visibility is
     /// at most the fraction of n points of the light's disk whose rays the
-    /// shadow map leaves seen, plus 1/16 (`map_fraction` and `MAP_MARGIN`
-    /// in visibility.wgsl); 0 leaves the edge's k alone (4.2).
+    /// shadow map leaves seen, plus a margin (`map_bound` and `map_margin`
+    /// in passes/map_rays.wgsl); 0 leaves the edge's k alone (4.2).
     pub map_samples: u32,
     /// `map_bound = "both"` (beyond 4.2; the default): where the shadow map
     /// sees the light's centre, the visibility is also at least the map's
-    /// fraction less 1/16; `"upper"` bounds it from above only.
+    /// fraction less that margin; `"upper"` bounds it from above only.
     pub map_bound_both: bool,
+    /// `map_march = k` (beyond the papers): a ray the map's search leaves
+    /// seen is sampled again at k light depths (`ray_marched_hidden` in
+    /// passes/map_rays.wgsl); 0: the search alone.
+    pub map_march: u32,
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`).
     pub repairs: Repairs,
@@ -215,7 +222,7 @@ impl MethodParams for PvmParams {
                 16,
                 0,
                 256,
-                "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1/16; 0: the edge's k alone (4.2)",
+                "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge); 0: the edge's k alone (4.2)",
             ),
             // Beyond 4.2 (issue 28): where the map sees the light's centre,
             // 4.2's half-plane (or the two edges) may hide more of the light
@@ -229,7 +236,17 @@ impl MethodParams for PvmParams {
                 "map_bound",
                 "both",
                 &["upper", "both"],
-                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1/16; both, and where the shadow map sees the light's centre, at least the fraction less 1/16",
+                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1.2 n^-0.7; both, and where the shadow map sees the light's centre, at least the fraction less that",
+            ),
+            // Beyond the papers (issue 28): ray_hidden's search passes by
+            // surfaces between the pixel and the one it starts at, and the
+            // rays' seen fraction errs high (docs/methods/pvm.md).
+            ParamSpec::int(
+                "map_march",
+                PVM_MAP_MARCH_DEFAULT,
+                0,
+                64,
+                "with map_samples > 0: a ray the shadow map's surface-to-surface search leaves seen is sampled again at this many light depths, from the pixel to the map's near plane, and hidden where a sample lies just behind the map's surface; 0: the search alone",
             ),
             OpenEdges::spec(),
             ParamSpec::choice(
@@ -253,6 +270,8 @@ impl MethodParams for PvmParams {
             // Within [0, 256] (the spec's range).
             map_samples: p.int("map_samples").clamp(0, 256) as u32,
             map_bound_both: p.choice("map_bound") == "both",
+            // Within [0, 64] (the spec's range).
+            map_march: p.int("map_march").clamp(0, 64) as u32,
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
         })
@@ -322,6 +341,7 @@ impl Method for PenumbraVolumeMaps {
                 | (u32::from(params.map_bound_both) << 7);
             let mut test = params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags);
             test.mode[2] = params.map_samples;
+            test.mode[3] = params.map_march;
             let uniforms = ctx.parameters("pvm::visibility_uniforms", &test);
             let resources = [
                 Binding::Texture(&map),

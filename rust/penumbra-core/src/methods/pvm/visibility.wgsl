@@ -24,7 +24,8 @@ struct EdgePoints {
 @group(0) @binding(5) var<storage, read> edges: array<EdgePoints>;
 // mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon";
 // bit 3: edges = "two" (the far edge map below is read); bit 4: lookup = "3x3";
-// bit 5: umbra_test = "rim"; bit 6: edges = "chain". mode.z: map_samples.
+// bit 5: umbra_test = "rim"; bit 6: edges = "chain"; bit 7: map_bound =
+// "both". mode.z: map_samples; mode.w: map_march.
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
@@ -641,12 +642,12 @@ fn shade(pixel: ScreenPixel) {
                     // the surface hiding the centre, or where the centre is
                     // seen at the edge.
                     let lower = (pvm.mode.y & 128u) != 0u && centre_lit;
-                    if (pvm.mode.z > 0u && (k > MAP_MARGIN || lower)) {
+                    if (pvm.mode.z > 0u && (k > map_margin(pvm.mode.z) || lower)) {
                         var d_start = centre_depth;
                         if (centre_lit) {
                             d_start = light_view_depth(pvm.light_space, 0.5 * (edge.h0.xyz + edge.h1.xyz));
                         }
-                        let bounded = map_bound(pvm, shadow_map, p, q.w, d_start, pvm.mode.z, k, lower);
+                        let bounded = map_bound(pvm, shadow_map, p, q.w, d_start, pvm.mode.z, k, lower, pvm.mode.w);
                         if (bounded < k) {
                             atomicAdd(&counters[3], 1u);
                         } else if (bounded > k) {

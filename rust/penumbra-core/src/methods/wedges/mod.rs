@@ -60,6 +60,9 @@ pub use geometry::{bin_wedges, coverage_bounds, coverage_term, penumbra_wedges, 
 /// `map_samples`' default.
 pub const MAP_SAMPLES_DEFAULT: i64 = 16;
 
+/// `map_march`'s default (docs/methods/wedges.md).
+pub const WEDGES_MAP_MARCH_DEFAULT: i64 = 8;
+
 pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "hidden", "cone+hidden", "cone+horizon"];
 
 /// The wedges and their screen bins (pass 2), as the pass cache keeps them.
@@ -90,12 +93,16 @@ pub struct WedgesParams {
     pub tile_cull: bool,
     /// `map_samples = n` (beyond both papers): inside wedges, the visibility
     /// is at most the fraction of n points of the light's disk whose rays
-    /// the shadow map leaves seen, plus 1/16, as pvm's (`map_fraction` in
+    /// the shadow map leaves seen, plus a margin, as pvm's (`map_bound` in
     /// passes/map_rays.wgsl); 0 leaves the wedges' sum alone.
     pub map_samples: u32,
     /// `map_bound = "both"`: where the map sees the light's centre, also at
-    /// least that fraction less 1/16.
+    /// least that fraction less the margin.
     pub map_bound_both: bool,
+    /// `map_march = k` (beyond the papers): a ray the map's search leaves
+    /// seen is sampled again at k light depths (`ray_marched_hidden` in
+    /// passes/map_rays.wgsl); 0: the search alone.
+    pub map_march: u32,
 }
 
 /// How the light intensity s inside a wedge is computed.
@@ -227,13 +234,23 @@ impl MethodParams for WedgesParams {
                 MAP_SAMPLES_DEFAULT,
                 0,
                 256,
-                "inside wedges, points of the light's disk whose rays from the pixel are followed through the shadow map (as pvm's): the visibility is at most the fraction seen plus 1/16; 0: the wedges' sum alone (both papers)",
+                "inside wedges, points of the light's disk whose rays from the pixel are followed through the shadow map (as pvm's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge); 0: the wedges' sum alone (both papers)",
             ),
             ParamSpec::choice(
                 "map_bound",
                 "both",
                 &["upper", "both"],
-                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1/16; both, and where the shadow map sees the light's centre, at least the fraction less 1/16",
+                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1.2 n^-0.7; both, and where the shadow map sees the light's centre, at least the fraction less that",
+            ),
+            // Beyond the papers (issue 28): ray_hidden's search passes by
+            // surfaces between the pixel and the one it starts at, and the
+            // rays' seen fraction errs high (docs/methods/wedges.md).
+            ParamSpec::int(
+                "map_march",
+                WEDGES_MAP_MARCH_DEFAULT,
+                0,
+                64,
+                "with map_samples > 0: a ray the shadow map's surface-to-surface search leaves seen is sampled again at this many light depths, from the pixel to the map's near plane, and hidden where a sample lies just behind the map's surface; 0: the search alone",
             ),
             OpenEdges::spec(),
             ParamSpec::choice(
@@ -265,6 +282,8 @@ impl MethodParams for WedgesParams {
             // Within [0, 256] (the spec's range).
             map_samples: p.int("map_samples").clamp(0, 256) as u32,
             map_bound_both: p.choice("map_bound") == "both",
+            // Within [0, 64] (the spec's range).
+            map_march: p.int("map_march").clamp(0, 64) as u32,
         })
     }
 }
@@ -326,6 +345,7 @@ impl Method for PenumbraWedges {
                 | (u32::from(params.map_bound_both) << 6);
             let mut shadow_test = params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0);
             shadow_test.mode[2] = params.map_samples;
+            shadow_test.mode[3] = params.map_march;
             let test = ctx.parameters("wedges::shadow_test", &shadow_test);
             let settings = ctx.parameters("wedges::settings", &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count] });
             // The tile cull: which binned wedges hold no pixel of their tile.

@@ -31,7 +31,8 @@ struct WedgeSettings {
     // x: tile size in pixels; y: tiles per row; z: flags (bit 0: falloff,
     // bit 1: repair "horizon", bit 2: hard_term "lit_side", bit 3: intensity
     // "coverage", bit 4: overlap "gate", bit 5: occluders "independent",
-    // bit 6: map_bound "both"); w: wedge count. wedge_test.mode.z: map_samples.
+    // bit 6: map_bound "both"); w: wedge count. wedge_test.mode.z: map_samples;
+    // wedge_test.mode.w: map_march.
     tiles: vec4<u32>,
 };
 
@@ -415,12 +416,12 @@ fn shade(pixel: ScreenPixel) {
             // starts at the surface hiding the centre, or at the holding
             // edge nearest the light.
             let lower = (settings.tiles.z & 64u) != 0u && hard > 0.0;
-            if (inside && wedge_test.mode.z > 0u && (v > MAP_MARGIN || lower)) {
+            if (inside && wedge_test.mode.z > 0u && (v > map_margin(wedge_test.mode.z) || lower)) {
                 var d_start = map_depth(wedge_test, shadow_map, q.xyz);
                 if (hard > 0.0) {
                     d_start = edge_depth;
                 }
-                let bounded = map_bound(wedge_test, shadow_map, p, q.w, d_start, wedge_test.mode.z, v, lower);
+                let bounded = map_bound(wedge_test, shadow_map, p, q.w, d_start, wedge_test.mode.z, v, lower, wedge_test.mode.w);
                 if (bounded < v) {
                     atomicAdd(&counters[1], 1u);
                 } else if (bounded > v) {
