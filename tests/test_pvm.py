@@ -40,8 +40,9 @@ def test_visibility_is_the_disk_cut_fraction_across_one_edge(renderer: penumbra.
     keeps one edge's fraction where no second edge's penumbra reaches. With
     the map bound (map_samples, the default 16) the visibility is never
     above Eq. 4.1's (or the falloff's) nor below the lower of the two:
-    MAP_MARGIN keeps the map's rays from darkening an edge that is exact
-    (measured: no pixel lowered; with 32 rays, up to 0.007)."""
+    `map_margin` (the spiral's own error under a straight line,
+    tests/test_map_rays.py) keeps the map's rays from moving an edge that
+    is exact."""
     scene = long_edge_scene()
     setting = {"falloff": falloff, "edges": edges}
     result = renderer.render(scene, "pvm", map_samples=0, intermediates=True, **setting)
