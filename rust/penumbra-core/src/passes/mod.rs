@@ -3,6 +3,7 @@
 
 pub mod centre_map;
 pub mod gbuffer;
+pub mod map_rays;
 pub mod object_map;
 pub mod samplers;
 pub mod screen;

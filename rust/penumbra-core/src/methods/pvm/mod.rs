@@ -15,6 +15,7 @@
 //! in a sliver rather than a shared extrusion vector: never NaN, at most a
 //! thin gap where the shadow-map test takes over. `stats` counts such vertices.
 
+use crate::passes::map_rays::MapBound;
 use std::sync::Arc;
 
 use glam::DVec3;
@@ -57,9 +58,6 @@ pub const EDGE_POINT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Fl
 pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "cone", "cone+hidden", "cone+hidden+centre"];
 
 /// The penumbra volume map (pass 2), as the pass cache keeps it.
-/// `map_march`'s default (docs/methods/pvm.md).
-pub const PVM_MAP_MARCH_DEFAULT: i64 = 8;
-
 pub const PENUMBRA_VOLUMES: CachedPass = CachedPass { name: "penumbra_volumes", capacity: 1 };
 
 #[derive(Debug, Clone, PartialEq)]
@@ -91,19 +89,9 @@ pub struct PvmParams {
     /// centre and 8 rim points the shadow map hides is in the umbra
     /// (`rim_hidden` in visibility.wgsl).
     pub rim_test: bool,
-    /// `map_samples = n` (beyond 4.2): inside a volume, the visibility is
-    /// at most the fraction of n points of the light's disk whose rays the
-    /// shadow map leaves seen, plus a margin (`map_bound` and `map_margin`
-    /// in passes/map_rays.wgsl); 0 leaves the edge's k alone (4.2).
-    pub map_samples: u32,
-    /// `map_bound = "both"` (beyond 4.2; the default): where the shadow map
-    /// sees the light's centre, the visibility is also at least the map's
-    /// fraction less that margin; `"upper"` bounds it from above only.
-    pub map_bound_both: bool,
-    /// `map_march = k` (beyond the papers): a ray the map's search leaves
-    /// seen is sampled again at k light depths (`ray_marched_hidden` in
-    /// passes/map_rays.wgsl); 0: the search alone.
-    pub map_march: u32,
+    /// The map bound (beyond the papers: `map_samples`, `map_bound`,
+    /// `map_march`; passes/map_rays.rs).
+    pub map: MapBound,
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`).
     pub repairs: Repairs,
@@ -209,45 +197,12 @@ impl MethodParams for PvmParams {
                 &["none", "rim"],
                 "inside a volume, where the shadow map hides the light's centre: none, the edge's k decides (4.2); rim, a pixel whose rays to 8 points of the light's rim the map hides as well is in the umbra",
             ),
-            // Beyond 4.2 (issue 28): the edge's k counts one occluder (a
-            // half-plane, two edges or a loop), and where other surfaces
-            // hide more of the light it is too light; two thirds of the
-            // squared error lay in the inner penumbra (halves.md). The
-            // bound lowers the penumbra RMSE on most generated and
-            // shared-mesh scenes and raises it on none measured; 32 or 64
-            // points change the medians by under 0.001 at twice and four
-            // times the rays (docs/methods/pvm.md).
-            ParamSpec::int(
-                "map_samples",
-                16,
-                0,
-                256,
-                "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge); 0: the edge's k alone (4.2)",
-            ),
-            // Beyond 4.2 (issue 28): where the map sees the light's centre,
-            // 4.2's half-plane (or the two edges) may hide more of the light
-            // than the caster does (the far tip of a grazing shadow, where
-            // the caster ends along its edge), and the outer penumbra came
-            // out too dark (halves.md). Where the map hides the centre the
-            // rays are not trusted to raise k: a surface the map cannot see
-            // (a boot's toe seen from below, generated seed 38) leaves them
-            // seen, and the umbra would be lit (docs/methods/pvm.md).
-            ParamSpec::choice(
-                "map_bound",
-                "both",
-                &["upper", "both"],
-                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1.2 n^-0.7; both, and where the shadow map sees the light's centre, at least the fraction less that",
-            ),
-            // Beyond the papers (issue 28): ray_hidden's search passes by
-            // surfaces between the pixel and the one it starts at, and the
-            // rays' seen fraction errs high (docs/methods/pvm.md).
-            ParamSpec::int(
-                "map_march",
-                PVM_MAP_MARCH_DEFAULT,
-                0,
-                64,
-                "with map_samples > 0: a ray the shadow map's surface-to-surface search leaves seen is sampled again at this many light depths, from the pixel to the map's near plane, and hidden where a sample lies just behind the map's surface; 0: the search alone",
-            ),
+        ]
+        .into_iter()
+        .chain(MapBound::specs(
+            "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge); 0: the edge's k alone (4.2)",
+        ))
+        .chain([
             OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
@@ -255,7 +210,7 @@ impl MethodParams for PvmParams {
                 &REPAIR_LEVELS,
                 "departures from the paper for real meshes, cumulative (docs/real_meshes.md): none, cone, cone+hidden, cone+hidden+centre, all (+horizon)",
             ),
-        ])
+        ]))
     }
 
     fn parse(p: &ParamSet) -> Result<PvmParams> {
@@ -267,11 +222,7 @@ impl MethodParams for PvmParams {
             chain_edges: p.choice("edges") == "chain",
             lookup_neighbours: p.choice("lookup") == "3x3",
             rim_test: p.choice("umbra_test") == "rim",
-            // Within [0, 256] (the spec's range).
-            map_samples: p.int("map_samples").clamp(0, 256) as u32,
-            map_bound_both: p.choice("map_bound") == "both",
-            // Within [0, 64] (the spec's range).
-            map_march: p.int("map_march").clamp(0, 64) as u32,
+            map: MapBound::parse(p),
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
         })
@@ -338,10 +289,9 @@ impl Method for PenumbraVolumeMaps {
                 | (u32::from(params.lookup_neighbours) << 4)
                 | (u32::from(params.rim_test) << 5)
                 | (u32::from(params.chain_edges) << 6)
-                | (u32::from(params.map_bound_both) << 7);
+                | (u32::from(params.map.both) << 7);
             let mut test = params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags);
-            test.mode[2] = params.map_samples;
-            test.mode[3] = params.map_march;
+            [test.mode[2], test.mode[3]] = params.map.mode();
             let uniforms = ctx.parameters("pvm::visibility_uniforms", &test);
             let resources = [
                 Binding::Texture(&map),

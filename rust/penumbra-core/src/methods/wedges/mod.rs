@@ -33,6 +33,7 @@
 //! are `pvm`'s (`crate::silhouettes`); the `repairs` levels reuse its
 //! `Repairs` ("cone" for the shared side lines, "hidden", "horizon").
 
+use crate::passes::map_rays::MapBound;
 use std::sync::Arc;
 
 use bytemuck::Zeroable;
@@ -57,12 +58,6 @@ pub use geometry::{bin_wedges, coverage_bounds, coverage_term, penumbra_wedges, 
 
 /// The values of `repairs`, cumulative in the order docs/methods/wedges.md
 /// measures them; "all" adds the horizon to the last.
-/// `map_samples`' default.
-pub const MAP_SAMPLES_DEFAULT: i64 = 16;
-
-/// `map_march`'s default (docs/methods/wedges.md).
-pub const WEDGES_MAP_MARCH_DEFAULT: i64 = 8;
-
 pub const REPAIR_LEVELS: [&str; 5] = ["all", "none", "hidden", "cone+hidden", "cone+horizon"];
 
 /// The wedges and their screen bins (pass 2), as the pass cache keeps them.
@@ -91,18 +86,9 @@ pub struct WedgesParams {
     /// Whether the tile cull (`tile_cull.wgsl`) skips wedges whose support
     /// holds no point of an 8 x 8 block of pixels.
     pub tile_cull: bool,
-    /// `map_samples = n` (beyond both papers): inside wedges, the visibility
-    /// is at most the fraction of n points of the light's disk whose rays
-    /// the shadow map leaves seen, plus a margin, as pvm's (`map_bound` in
-    /// passes/map_rays.wgsl); 0 leaves the wedges' sum alone.
-    pub map_samples: u32,
-    /// `map_bound = "both"`: where the map sees the light's centre, also at
-    /// least that fraction less the margin.
-    pub map_bound_both: bool,
-    /// `map_march = k` (beyond the papers): a ray the map's search leaves
-    /// seen is sampled again at k light depths (`ray_marched_hidden` in
-    /// passes/map_rays.wgsl); 0: the search alone.
-    pub map_march: u32,
+    /// The map bound (beyond the papers: `map_samples`, `map_bound`,
+    /// `map_march`; passes/map_rays.rs).
+    pub map: MapBound,
 }
 
 /// How the light intensity s inside a wedge is computed.
@@ -225,33 +211,12 @@ impl MethodParams for WedgesParams {
                 "skip, per 8 x 8 pixels, the binned wedges whose support holds none of their points (beyond the papers: the same image to within float rounding, the visibility pass in 0.42-0.76 of its time on generated scenes at 256x256: docs/methods/wedges.md); false: every binned wedge is evaluated at every pixel of its tile",
             ),
             ParamSpec::bool("falloff", false, "Parker et al.'s 3s^2 - 2s^3 attenuation of the interpolated intensity (4.2)"),
-            // Beyond both papers (issue 28), as pvm's map bound: the wedges
-            // sum one silhouette's terms, seen from the light's centre, and
-            // where other surfaces hide more of the light, or less, the sum
-            // is wrong (docs/methods/wedges.md).
-            ParamSpec::int(
-                "map_samples",
-                MAP_SAMPLES_DEFAULT,
-                0,
-                256,
-                "inside wedges, points of the light's disk whose rays from the pixel are followed through the shadow map (as pvm's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge); 0: the wedges' sum alone (both papers)",
-            ),
-            ParamSpec::choice(
-                "map_bound",
-                "both",
-                &["upper", "both"],
-                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1.2 n^-0.7; both, and where the shadow map sees the light's centre, at least the fraction less that",
-            ),
-            // Beyond the papers (issue 28): ray_hidden's search passes by
-            // surfaces between the pixel and the one it starts at, and the
-            // rays' seen fraction errs high (docs/methods/wedges.md).
-            ParamSpec::int(
-                "map_march",
-                WEDGES_MAP_MARCH_DEFAULT,
-                0,
-                64,
-                "with map_samples > 0: a ray the shadow map's surface-to-surface search leaves seen is sampled again at this many light depths, from the pixel to the map's near plane, and hidden where a sample lies just behind the map's surface; 0: the search alone",
-            ),
+        ]
+        .into_iter()
+        .chain(MapBound::specs(
+            "inside wedges, points of the light's disk whose rays from the pixel are followed through the shadow map (as pvm's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge); 0: the wedges' sum alone (both papers)",
+        ))
+        .chain([
             OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
@@ -259,7 +224,7 @@ impl MethodParams for WedgesParams {
                 &REPAIR_LEVELS,
                 "departures from the paper for real meshes, cumulative: none, hidden (no wedge for silhouette edges hidden from the light centre), cone+hidden (shared side lines kept in their vertex's light cone), all (+ the light below the receiver's horizon hidden); cone+horizon is all but hidden",
             ),
-        ])
+        ]))
     }
 
     fn parse(p: &ParamSet) -> Result<WedgesParams> {
@@ -279,11 +244,7 @@ impl MethodParams for WedgesParams {
             overlap_gate: p.choice("overlap") == "gate",
             independent_occluders: p.choice("occluders") == "independent",
             tile_cull: p.bool("tile_cull"),
-            // Within [0, 256] (the spec's range).
-            map_samples: p.int("map_samples").clamp(0, 256) as u32,
-            map_bound_both: p.choice("map_bound") == "both",
-            // Within [0, 64] (the spec's range).
-            map_march: p.int("map_march").clamp(0, 64) as u32,
+            map: MapBound::parse(p),
         })
     }
 }
@@ -342,10 +303,9 @@ impl Method for PenumbraWedges {
                 | (u32::from(coverage) << 3)
                 | (u32::from(params.overlap_gate) << 4)
                 | (u32::from(params.independent_occluders) << 5)
-                | (u32::from(params.map_bound_both) << 6);
+                | (u32::from(params.map.both) << 6);
             let mut shadow_test = params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0);
-            shadow_test.mode[2] = params.map_samples;
-            shadow_test.mode[3] = params.map_march;
+            [shadow_test.mode[2], shadow_test.mode[3]] = params.map.mode();
             let test = ctx.parameters("wedges::shadow_test", &shadow_test);
             let settings = ctx.parameters("wedges::settings", &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count] });
             // The tile cull: which binned wedges hold no pixel of their tile.

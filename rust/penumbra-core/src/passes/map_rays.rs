@@ -1,0 +1,73 @@
+//! The map bound (beyond the papers, issue 28) that `pvm` and `wedges`
+//! share: rays from a pixel to points of the light's disk followed through
+//! the centre's shadow map (passes/map_rays.wgsl), and their parameters.
+
+use crate::params::{ParamSet, ParamSpec};
+
+/// `map_samples`' default: 16 points (32 lower the generated median further
+/// at about 1.4 times the visibility pass: docs/methods/pvm.md).
+pub const SAMPLES_DEFAULT: i64 = 16;
+/// `map_march`'s default: 8 light depths (4 and 16 did worse: docs/methods/pvm.md).
+pub const MARCH_DEFAULT: i64 = 8;
+
+/// `map_samples`, `map_bound` and `map_march`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MapBound {
+    /// Points of the light's disk whose rays are followed (0: no bound).
+    pub samples: u32,
+    /// `map_bound = "both"`: where the map sees the light's centre, the
+    /// visibility is also at least the rays' fraction less the margin;
+    /// `"upper"`: at most the fraction plus it, only.
+    pub both: bool,
+    /// Light depths at which a ray the map's search leaves seen is sampled
+    /// again (`ray_marched_hidden`; 0: the search alone).
+    pub march: u32,
+}
+
+impl MapBound {
+    /// The three parameters; `samples_doc` says what the bound bounds and
+    /// what 0 leaves (the method's own visibility).
+    pub fn specs(samples_doc: &'static str) -> [ParamSpec; 3] {
+        [
+            ParamSpec::int("map_samples", SAMPLES_DEFAULT, 0, 256, samples_doc),
+            // Where the map sees the light's centre, an edge model may hide
+            // more of the light than the caster does (the far tip of a
+            // grazing shadow, where the caster ends along its edge). Where
+            // the map hides the centre the rays are not trusted to raise the
+            // visibility: a surface the map cannot see (a boot's toe seen
+            // from below, generated seed 38) leaves them seen, and the umbra
+            // would be lit (docs/methods/pvm.md).
+            ParamSpec::choice(
+                "map_bound",
+                "both",
+                &["upper", "both"],
+                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1.2 n^-0.7; both, and where the shadow map sees the light's centre, at least the fraction less that",
+            ),
+            // The search jumps from surface to surface as the map shows them
+            // and passes by what lies between: the rays' seen fraction errs
+            // high (docs/methods/pvm.md).
+            ParamSpec::int(
+                "map_march",
+                MARCH_DEFAULT,
+                0,
+                64,
+                "with map_samples > 0: a ray the shadow map's surface-to-surface search leaves seen is sampled again at this many light depths, from the pixel to the map's near plane, and hidden where a sample lies just behind the map's surface; 0: the search alone",
+            ),
+        ]
+    }
+
+    pub fn parse(p: &ParamSet) -> Self {
+        Self {
+            // Within the specs' ranges.
+            samples: p.int("map_samples").clamp(0, 256) as u32,
+            both: p.choice("map_bound") == "both",
+            march: p.int("map_march").clamp(0, 64) as u32,
+        }
+    }
+
+    /// The shadow test's `mode.z` and `mode.w` (passes/map_rays.wgsl's `n`
+    /// and `march`).
+    pub fn mode(&self) -> [u32; 2] {
+        [self.samples, self.march]
+    }
+}
