@@ -106,18 +106,37 @@ fn ray_marched_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, 
 // = "both", where the map sees the light's centre) it is also at least
 // the fraction less that. With `march` > 0 (map_march) a ray
 // `ray_hidden` leaves seen is looked at again (`ray_marched_hidden`).
-// The points stop once the rays left cannot take the fraction out of k's
-// band: the result is then k.
-fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f32, d_start: f32, n: u32, k: f32, lower: bool, march: u32) -> f32 {
+// The points stop once the rays left cannot take the fraction out of the
+// reference's band: the result is then k.
+fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f32, d_start: f32, n: u32, k: f32, lower: bool, march: u32, model: vec4<f32>, control: bool) -> f32 {
     let l = t.center.xyz;
     let r = t.center.w;
     let disk = disk_axes(t, p);
     // n >= 1 here (the caller checks). Seen rays at least `lo`: the upper
     // bound leaves k; at most `hi`: the lower bound does.
     let count = f32(n);
-    let margin = map_margin(n);
-    let lo = count * (k - margin);
-    let hi = select(2.0 * count, count * (k + margin), lower);
+    // What the rays are compared with: k, within the spiral's own error
+    // (`map_margin`); or, with `control`, the fraction of the same points
+    // on the lit side of k's own model, the plane `model` (points x with
+    // dot(model.xyz, x) > model.w lit), within one point (the map's texel
+    // rounding at the outline): where the rays and the model disagree the
+    // map sees what the model does not, and k moves by those points alone.
+    var reference = k;
+    var margin = map_margin(n);
+    if (control) {
+        var lit = 0.0;
+        for (var i = 0u; i < n; i++) {
+            let radius = sqrt((f32(i) + 0.5) / count);
+            let a = f32(i) * GOLDEN_ANGLE;
+            if (dot(model.xyz, l + r * radius * (cos(a) * disk.e1 + sin(a) * disk.e2)) > model.w) {
+                lit += 1.0;
+            }
+        }
+        reference = lit / count;
+        margin = CONTROL_MARGIN_POINTS / count;
+    }
+    let lo = count * (reference - margin);
+    let hi = select(2.0 * count, count * (reference + margin), lower);
     var seen = 0.0;
     for (var i = 0u; i < n; i++) {
         let radius = sqrt((f32(i) + 0.5) / count);
@@ -131,11 +150,13 @@ fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f3
             return k;
         }
     }
-    let f = seen / count;
+    // k moved by what the rays find beyond the reference (the rays'
+    // fraction itself where the reference is k), within [0, 1].
+    let f = select(seen / count, k + seen / count - reference, control);
     if (lower) {
-        return clamp(k, f - margin, f + margin);
+        return clamp(k, max(f - margin, 0.0), min(f + margin, 1.0));
     }
-    return min(k, f + margin);
+    return min(k, max(f + margin, 0.0));
 }
 
 // How far the fraction of n spiral points may lie from k before it moves
@@ -153,6 +174,11 @@ fn map_margin(n: u32) -> f32 {
     // n >= 1 (the callers check): pow of a positive base.
     return 1.2 * pow(f32(n), -0.7);
 }
+
+// map_control's margin, in points: the map's texel rounding at an
+// occluder's outline can put a ray on the other side of it. Under lone
+// straight edges (tests/test_pvm.py's) one point moves no pixel.
+const CONTROL_MARGIN_POINTS: f32 = 1.0;
 
 // pi (3 - sqrt(5)): the Vogel spiral's turn per point.
 const GOLDEN_ANGLE: f32 = 2.3999632;

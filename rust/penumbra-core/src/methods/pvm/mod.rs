@@ -92,6 +92,11 @@ pub struct PvmParams {
     /// The map bound (beyond the papers: `map_samples`, `map_bound`,
     /// `map_march`; passes/map_rays.rs).
     pub map: MapBound,
+    /// `map_control` (beyond 4.2, not the default yet): where k is the
+    /// nearest edge's half-plane fraction, the rays are compared with that
+    /// half-plane at the same points, and k moves only by the points where
+    /// they disagree (`map_bound` in passes/map_rays.wgsl).
+    pub map_control: bool,
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`).
     pub repairs: Repairs,
@@ -203,6 +208,15 @@ impl MethodParams for PvmParams {
             "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge); 0: the edge's k alone (4.2)",
         ))
         .chain([
+            // A control variate (issue 28): the spiral's error under a
+            // straight edge is shared by the rays and the half-plane, so it
+            // cancels, and the margin can be one point instead of
+            // map_margin's 0.17 at 16 (docs/methods/pvm.md).
+            ParamSpec::bool(
+                "map_control",
+                false,
+                "with map_samples > 0, where k is the nearest edge's half-plane fraction (Eq. 4.1): compare the rays with that half-plane at the same points and move k only by the points where they disagree, beyond one point; false: compare them with k, beyond 1.2 n^-0.7",
+            ),
             OpenEdges::spec(),
             ParamSpec::choice(
                 "repairs",
@@ -223,6 +237,7 @@ impl MethodParams for PvmParams {
             lookup_neighbours: p.choice("lookup") == "3x3",
             rim_test: p.choice("umbra_test") == "rim",
             map: MapBound::parse(p),
+            map_control: p.bool("map_control"),
             open_edges: OpenEdges::parse(p.choice("open_edges")),
             repairs: Repairs::parse(p.choice("repairs")),
         })
@@ -289,7 +304,8 @@ impl Method for PenumbraVolumeMaps {
                 | (u32::from(params.lookup_neighbours) << 4)
                 | (u32::from(params.rim_test) << 5)
                 | (u32::from(params.chain_edges) << 6)
-                | (u32::from(params.map.both) << 7);
+                | (u32::from(params.map.both) << 7)
+                | (u32::from(params.map_control) << 8);
             let mut test = params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags);
             [test.mode[2], test.mode[3]] = params.map.mode();
             let uniforms = ctx.parameters("pvm::visibility_uniforms", &test);

@@ -25,7 +25,7 @@ struct EdgePoints {
 // mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon";
 // bit 3: edges = "two" (the far edge map below is read); bit 4: lookup = "3x3";
 // bit 5: umbra_test = "rim"; bit 6: edges = "chain"; bit 7: map_bound =
-// "both". mode.z: map_samples; mode.w: map_march.
+// "both"; bit 8: map_control. mode.z: map_samples; mode.w: map_march.
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
@@ -596,6 +596,9 @@ fn shade(pixel: ScreenPixel) {
                 let index = hit.index;
                 let edge = edges[index];
                 var k = hit.k;
+                // map_control: k is still the nearest edge's half-plane
+                // fraction (Eq. 4.1), the model the rays are compared with.
+                var half_plane = (pvm.mode.y & 256u) != 0u;
                 let agrees = hit.agrees;
                 if ((pvm.mode.y & 8u) != 0u && ((pvm.mode.y & 2u) == 0u || agrees) && k > 0.0 && k < 1.0) {
                     // edges = "two": the volume farthest from the light at this
@@ -610,6 +613,7 @@ fn shade(pixel: ScreenPixel) {
                         let nearer = max(light_view_depth(pvm.light_space, other.h0.xyz), light_view_depth(pvm.light_space, other.h1.xyz)) < q.w;
                         if (nearer && kb > 0.0 && kb < 1.0) {
                             k = two_edge_visibility(p, q.w, edge, other);
+                            half_plane = half_plane && k == hit.k;
                         }
                     }
                 }
@@ -624,6 +628,7 @@ fn shade(pixel: ScreenPixel) {
                     let chain = chain_visibility(p, index, centre_lit);
                     if (chain >= 0.0) {
                         k = chain;
+                        half_plane = false;
                         atomicAdd(&counters[2], 1u);
                     }
                 }
@@ -635,6 +640,7 @@ fn shade(pixel: ScreenPixel) {
                     if ((pvm.mode.y & 1u) != 0u) {
                         // Parker et al.'s sinusoidal falloff, as the Bernstein interpolant (4.2).
                         k = k * k * (3.0 - 2.0 * k);
+                        half_plane = false;
                     }
                     // map_samples (beyond 4.2): at most what the map's rays
                     // leave seen, and with map_bound = "both", where the map
@@ -647,7 +653,12 @@ fn shade(pixel: ScreenPixel) {
                         if (centre_lit) {
                             d_start = light_view_depth(pvm.light_space, 0.5 * (edge.h0.xyz + edge.h1.xyz));
                         }
-                        let bounded = map_bound(pvm, shadow_map, p, q.w, d_start, pvm.mode.z, k, lower, pvm.mode.w);
+                        // Points x on the lit side of the edge's cutting plane:
+                        // dot(n, x) > dot(n, h0) (n = 0 where p lies on the
+                        // edge's line: no model).
+                        let cut = cutting_plane(p, edge.h0.xyz, edge.h1.xyz);
+                        let model = vec4<f32>(cut.n, dot(cut.n, edge.h0.xyz));
+                        let bounded = map_bound(pvm, shadow_map, p, q.w, d_start, pvm.mode.z, k, lower, pvm.mode.w, model, half_plane && dot(cut.n, cut.n) > 0.5);
                         if (bounded < k) {
                             atomicAdd(&counters[3], 1u);
                         } else if (bounded > k) {

@@ -421,7 +421,8 @@ fn shade(pixel: ScreenPixel) {
                 if (hard > 0.0) {
                     d_start = edge_depth;
                 }
-                let bounded = map_bound(wedge_test, shadow_map, p, q.w, d_start, wedge_test.mode.z, v, lower, wedge_test.mode.w);
+                // The wedges' sum has no one plane to compare the rays with: k itself.
+                let bounded = map_bound(wedge_test, shadow_map, p, q.w, d_start, wedge_test.mode.z, v, lower, wedge_test.mode.w, vec4<f32>(0.0), false);
                 if (bounded < v) {
                     atomicAdd(&counters[1], 1u);
                 } else if (bounded > v) {
