@@ -239,10 +239,16 @@ def test_the_map_bound_finds_the_second_caster_one_edge_misses(renderer: penumbr
     bar and misses the other. The map bound (map_samples, default 16)
     follows 16 rays per pixel through the shadow map, finds the other bar
     on them and lowers k to the fraction they leave seen plus `map_margin`
-    (0.17 at 16 points). Measured against `reference` at 1024 samples:
-    penumbra RMSE 0.107 -> 0.077, and 0.298 -> 0.169 on the 640 penumbra
-    pixels it moves (32 rays, margin 0.106: 0.061, and 0.268 -> 0.069 on
-    800). It only ever lowers k here, and map_samples=0 is 4.2's image."""
+    (0.17 at 16 points) and the texel band (`texel_band`: the share of the
+    light whose rays pass within a map texel of the edge's outline, large
+    under the lower bar), and past that band down to the fraction over one
+    more (`toward`). Measured against `reference` at 1024 samples:
+    penumbra RMSE 0.107 -> 0.074, and 0.382 -> 0.125 on the 320 penumbra
+    pixels it moves (before the texel band and `toward`: 0.077, 640
+    pixels). The chain
+    walk decides these pixels (no half-plane), so map_control has nothing
+    to compare with here. It only ever lowers k, and map_samples=0 is
+    4.2's image."""
     scene = bars_scene((2.5, -0.55, 0.9), (1.2, 0.55, 0.9))
     truth = renderer.render(scene, "reference", n_samples=1024).visibility
     alone = renderer.render(scene, "pvm", map_samples=0)
@@ -251,9 +257,9 @@ def test_the_map_bound_finds_the_second_caster_one_edge_misses(renderer: penumbr
     moved = region & (np.abs(bounded.visibility - alone.visibility) > 1e-6)
     rmse = lambda v, m: float(np.sqrt(((v - truth)[m] ** 2).mean()))
     assert rmse(bounded.visibility, region) < 0.8 * rmse(alone.visibility, region), (rmse(alone.visibility, region), rmse(bounded.visibility, region))
-    assert moved.sum() > 500 and rmse(bounded.visibility, moved) < 0.65 * rmse(alone.visibility, moved), (moved.sum(), rmse(alone.visibility, moved), rmse(bounded.visibility, moved))
+    assert moved.sum() > 250 and rmse(bounded.visibility, moved) < 0.65 * rmse(alone.visibility, moved), (moved.sum(), rmse(alone.visibility, moved), rmse(bounded.visibility, moved))
     assert (bounded.visibility <= alone.visibility + 1e-6).all()
-    assert bounded.stats["map_bounded_pixels"] > 500 and alone.stats["map_bounded_pixels"] == 0, (bounded.stats, alone.stats)
+    assert bounded.stats["map_bounded_pixels"] > 250 and alone.stats["map_bounded_pixels"] == 0, (bounded.stats, alone.stats)
 
 
 def test_the_map_bound_raises_k_where_the_map_sees_the_centre(renderer: penumbra.Renderer) -> None:
@@ -261,11 +267,13 @@ def test_the_map_bound_raises_k_where_the_map_sees_the_centre(renderer: penumbra
     edges="two" (no loop walk) 4.2's half-plane hides far more of the light
     than the plate does. Where the map sees the light's centre, the bound
     from both sides (map_bound="both", the default) raises k to the
-    fraction of its rays left seen, less `map_margin`. With 32 rays
-    (margin 0.106), measured against `reference` at 1024 samples on the
-    penumbra pixels `hard` sees the centre from: 0.0901 from above only
-    (unchanged from no bound), 0.0698 from both sides, 676 pixels raised
-    (16 rays, margin 0.17: 0.0873, 130 raised). Where the map hides the
+    fraction of its rays left seen, less `map_margin` and the texel band
+    (and past that, up to the fraction over one more: `away`). With 32
+    rays (margin 0.106), measured against `reference` at 1024 samples on
+    the penumbra pixels `hard` sees the centre from: 0.0901 from above
+    only (unchanged from no bound), 0.0556 from both sides, 873 pixels
+    raised (16 rays, margin 0.17: 0.0852, 189 raised; before `away`:
+    0.0698 and 0.0873). Where the map hides the
     centre nothing moves (the rays are not trusted to raise k there: the
     map cannot see what hides the light behind its first surface)."""
     w = 0.05
@@ -295,9 +303,13 @@ def test_the_map_bound_leaves_a_straight_edges_exact_light_alone(renderer: penum
     a plate 2 by 3 at height 4 under a light of radius 1, seen from above,
     lost up to 0.11 of its light at 3677 pixels, in streaks along its
     edges. With `map_margin` (1.2 n^-0.7, 0.17 at 16) none moves, with or
-    without map_march, nor with 32 rays; nor with pvm's map_control, whose
-    margin is one point (the spiral's error is the half-plane's too, and
-    cancels)."""
+    without map_march, nor with 32 rays; nor with pvm's map_control (the
+    default), whose margin is one point and the texel band (the spiral's
+    error is the half-plane's too, and cancels). These scenes use cube
+    maps: until `goal_depth` the rays' light points took the depth of their
+    own offset's axis, their rays' points came out nearer the light than
+    their depth, and map_control lowered the bar's exact k by up to 0.045
+    (a row of 105 pixels; test_visibility_is_the_disk_cut_fraction_across_one_edge)."""
     side = penumbra.Camera(eye=(0.0, 5.0, 5.5), target=(0.0, 0.0, 2.0), fov_y=30, width=128, height=128)
     above = penumbra.Camera(eye=(0.0, 9.0, 0.5), target=(0.0, 0.0, 0.0), fov_y=30, width=128, height=128)
     cases = [(side, (0.0, height, 0.0), (8.0, 0.2, 3.0), radius, yaw) for height, radius, yaw in ((2.0, 0.05, 0.0), (2.0, 0.3, 0.0), (2.0, 0.8, 45.0), (4.0, 0.3, 70.0), (4.0, 1.2, 90.0))]
@@ -314,27 +326,53 @@ def test_the_map_bound_leaves_a_straight_edges_exact_light_alone(renderer: penum
             assert bounded.stats["map_bounded_pixels"] == bounded.stats["map_raised_pixels"] == 0, (what, bounded.stats)
 
 
+@pytest.mark.parametrize("method", ["pvm", "wedges"])
+def test_the_map_rays_pass_beside_a_wall_the_light_sees_edge_on(renderer: penumbra.Renderer, method: str) -> None:
+    """A long wall standing on the ground, its faces seen edge-on or nearly
+    so from the light: the wall's top edge alone shades the ground beyond
+    it, so Eq. 4.1's k (and the wedges' coverage) is exact there, and the
+    map's rays must move no pixel. A ray passing beside the wall's top lies
+    behind the wall's face as the map holds it, and map_march (a surface
+    taken for a sheet a step thick) reads it hidden. With pvm's map_control
+    counting the march's rays against a margin of one point, k fell by up
+    to 0.125 here (7 pixels; 8 by 0.0625 at yaw 20), and the Cornell box of
+    docs/real_meshes.md got a streak along its box's edge (0.0107 ->
+    0.0126); the plain bound moved one pixel by 0.006 (the texel rounding
+    at the outline). Now the control's upper side counts the rays the
+    search leaves seen, the march's rays bound k through the plain bound,
+    and both margins carry the texel band."""
+    side = penumbra.Camera(eye=(0.0, 5.0, -5.5), target=(0.0, 0.0, -1.0), fov_y=30, width=128, height=128)
+    for light_z, radius, yaw, height in ((1.0, 0.3, 0.0, 1.0), (1.0, 0.3, 20.0, 1.0), (0.5, 0.8, 30.0, 1.0), (1.5, 0.3, 0.0, 2.0), (3.0, 0.5, 10.0, 0.5)):
+        wall = box((0.0, height / 2, 0.0), (8.0, height, 0.2), yaw_degrees=yaw, object_id=1, name="wall")
+        scene = penumbra.Scene([ground_slab(), wall], penumbra.SphereLight((0.0, 6.0, light_z), radius, intensity=60.0), side)
+        alone = renderer.render(scene, method, map_samples=0).visibility
+        for params in ({}, {"map_control": True} if method == "pvm" else {"map_samples": 32}):
+            bounded = renderer.render(scene, method, **params)
+            what = f"light z {light_z}, radius {radius}, yaw {yaw}, height {height}, {params}"
+            np.testing.assert_array_equal(bounded.visibility, alone, err_msg=what)
+
+
 def test_map_control_moves_k_by_the_points_the_map_alone_hides(renderer: penumbra.Renderer) -> None:
     """The two bars of the map-bound test with edges="two": where one edge's
-    half-plane misses the other bar, map_control compares the 16 rays with
-    that half-plane at the same points, so k drops by the points the other
-    bar hides, within one point, instead of by what is left beyond the
-    spiral's error (0.17 at 16 points). Measured against `reference` at
-    1024 samples, penumbra RMSE: 0.107 without the bound, 0.077 with it,
-    0.060 with map_control (820 pixels lowered against 640). With
-    edges="chain" (the default) the walk decides those pixels, where the
-    map sees the light's centre, and map_control leaves its k to the
-    plain bound (0.077 both)."""
+    half-plane misses the other bar, map_control (the default) compares
+    the 16 rays with that half-plane at the same points, so k drops by the
+    points the other bar hides, beyond one point and the texel band,
+    instead of by what is left beyond the spiral's error (0.17 at 16
+    points). Measured against `reference` at 1024 samples, penumbra RMSE:
+    0.107 without the bound, 0.074 with map_control=False (320 pixels
+    lowered), 0.059 with it (606). With edges="chain" (the default) the
+    walk decides those pixels, where the map sees the light's centre, and
+    map_control leaves its k to the plain bound (0.074 both)."""
     scene = bars_scene((2.5, -0.55, 0.9), (1.2, 0.55, 0.9))
     truth = renderer.render(scene, "reference", n_samples=1024).visibility
     region = (truth > 0.02) & (truth < 0.98)
     rmse = lambda v: float(np.sqrt(((v - truth)[region] ** 2).mean()))
-    bounded = renderer.render(scene, "pvm", edges="two")
-    control = renderer.render(scene, "pvm", edges="two", map_control=True)
-    assert rmse(control.visibility) < 0.85 * rmse(bounded.visibility), (rmse(bounded.visibility), rmse(control.visibility))
-    assert control.stats["map_bounded_pixels"] > bounded.stats["map_bounded_pixels"] > 500, (bounded.stats, control.stats)
+    plain = renderer.render(scene, "pvm", edges="two", map_control=False)
+    control = renderer.render(scene, "pvm", edges="two")
+    assert rmse(control.visibility) < 0.85 * rmse(plain.visibility), (rmse(plain.visibility), rmse(control.visibility))
+    assert control.stats["map_bounded_pixels"] > plain.stats["map_bounded_pixels"] > 250, (plain.stats, control.stats)
     chain = renderer.render(scene, "pvm").visibility
-    np.testing.assert_array_equal(renderer.render(scene, "pvm", map_control=True).visibility, chain)
+    np.testing.assert_array_equal(renderer.render(scene, "pvm", map_control=False).visibility, chain)
 
 
 def test_the_rim_test_darkens_an_umbra_under_a_nearer_caster(renderer: penumbra.Renderer) -> None:

@@ -41,7 +41,7 @@ impl MapBound {
                 "map_bound",
                 "both",
                 &["upper", "both"],
-                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1.2 n^-0.7; both, and where the shadow map sees the light's centre, at least the fraction less that",
+                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1.2 n^-0.7 and the texel band (the share of the light whose rays pass within a map texel of the occluder's outline); both, and where the shadow map sees the light's centre, at least the fraction less that",
             ),
             // The search jumps from surface to surface as the map shows them
             // and passes by what lies between: the rays' seen fraction errs

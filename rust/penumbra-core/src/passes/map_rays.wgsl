@@ -29,6 +29,22 @@ fn disk_axes(t: ShadowTest, p: vec3<f32>) -> DiskAxes {
     return DiskAxes(e1, cross(w, e1));
 }
 
+// The light depth of the light point `goal` along the axis of p's own
+// layer, where the light depth of the ray from p is affine (cube faces:
+// nearly so for the ray's points in p's face). `light_view_depth` of a
+// light point takes the axis of its own offset from the centre on a cube
+// (the largest of its components, at most r): a ray's points then came
+// out nearer the light than their depth says, by up to 0.3 of a
+// receiver's height under a light of radius 0.8, and a ray 3 texels
+// beside a bar's outline read its top (tests/test_pvm.py's straight edge).
+fn goal_depth(t: ShadowTest, p: vec3<f32>, goal: vec3<f32>) -> f32 {
+    if (!is_cube(t.light_space)) {
+        return light_view_depth(t.light_space, goal);
+    }
+    let layer = light_layer(t.light_space, p);
+    return -layer_frame(t.light_space, layer, (t.light_space.view * vec4<f32>(goal, 1.0)).xyz).z;
+}
+
 // Whether the shadow map hides the ray from p (at light depth `depth`) to
 // the light point `goal`, the search starting at light depth `d_start`
 // (a surface thought to lie on the ray): at the light depth d of the last
@@ -38,7 +54,7 @@ fn disk_axes(t: ShadowTest, p: vec3<f32>) -> DiskAxes {
 // beyond p or within 2 texels in front of it (p's own surface); else
 // d = m, at most 16 times (then taken for seen).
 fn ray_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f32, d_start: f32, goal: vec3<f32>) -> bool {
-    let d_goal = light_view_depth(t.light_space, goal);
+    let d_goal = goal_depth(t, p, goal);
     // Surfaces within 2 texels of p's depth are p's own (the ray leaves
     // p's surface there): the far side of the settling tolerance below.
     let near_p = depth - 2.0 * light_texel_size(t.light_space, depth);
@@ -72,7 +88,7 @@ fn ray_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f
 // and 2 texels: a surface taken as a sheet that thick, which the samples
 // cannot step over.
 fn ray_marched_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f32, goal: vec3<f32>, k: u32) -> bool {
-    let d_goal = light_view_depth(t.light_space, goal);
+    let d_goal = goal_depth(t, p, goal);
     let z0 = depth - 2.0 * light_texel_size(t.light_space, depth);
     let z1 = max(t.light_space.depth.x, d_goal);
     // No room between p's surface and the near plane: nothing to hide it.
@@ -102,28 +118,45 @@ fn ray_marched_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, 
 // silhouette's occluder (pvm's half-plane, two edges or loop, the wedges'
 // sum); the map sees every surface nearer the light that its texels hold,
 // but not what lies behind them. Hidden light is hidden whichever sees it:
-// k is at most the fraction plus `map_margin(n)`. With `lower` (map_bound
-// = "both", where the map sees the light's centre) it is also at least
-// the fraction less that. With `march` > 0 (map_march) a ray
-// `ray_hidden` leaves seen is looked at again (`ray_marched_hidden`).
-// The points stop once the rays left cannot take the fraction out of the
-// reference's band: the result is then k.
-fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f32, d_start: f32, n: u32, k: f32, lower: bool, march: u32, model: vec4<f32>, control: bool) -> f32 {
+// k stands where it lies within `map_margin(n)` and the texel band
+// (`texel_band`) of the fraction; beyond, it is wrong by more than the
+// points and the texels can be, and it goes to the fraction over one more
+// margin (`toward`). With `lower` (map_bound = "both", where the map sees
+// the light's centre) the same from below (`away`). With `march` > 0
+// (map_march) a ray `ray_hidden` leaves seen is looked at again
+// (`ray_marched_hidden`). With `control` (pvm's map_control) the rays are
+// compared with k's own model at the same points instead (below). The
+// points stop once the rays left cannot take the fraction out of the
+// band: the result is then k.
+fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f32, d_start: f32, n: u32, k: f32, lower: bool, march: u32, model: vec4<f32>, model_depth: f32, control: bool) -> f32 {
     let l = t.center.xyz;
     let r = t.center.w;
     let disk = disk_axes(t, p);
-    // n >= 1 here (the caller checks). Seen rays at least `lo`: the upper
-    // bound leaves k; at most `hi`: the lower bound does.
+    // n >= 1 here (the caller checks).
     let count = f32(n);
-    // What the rays are compared with: k, within the spiral's own error
-    // (`map_margin`); or, with `control`, the fraction of the same points
-    // on the lit side of k's own model, the plane `model` (points x with
-    // dot(model.xyz, x) > model.w lit), within one point (the map's texel
-    // rounding at the outline): where the rays and the model disagree the
-    // map sees what the model does not, and k moves by those points alone.
+    // The map's rays pass within a texel of an occluder's outline over
+    // `band` of the light (at the model's depth: pvm's edge, the wedges'
+    // holding edge nearest the light); the map cannot tell which side.
+    let band = texel_band(t, depth, model_depth, r);
+    // The plain bound: k within the spiral's own error (`map_margin`) and
+    // the band of the fraction of rays seen (`ray_hidden`, then
+    // `ray_marched_hidden`).
+    let margin = map_margin(n) + band;
+    // With `control`: the fraction of the same points on the lit side of
+    // k's own model, the plane `model` (points x with dot(model.xyz, x) >
+    // model.w lit). Where the rays and the model disagree the map sees what
+    // the model does not, and k moves by those points alone, beyond one
+    // point and the band (the spiral's error is the model's too).
+    // The control's upper side counts the rays `ray_hidden` leaves seen,
+    // without the march: the march takes a surface for a sheet a step
+    // thick, and hid rays passing beside a plate's or a wall's edge by up
+    // to 2 of 16, which the plain bound's margin covers and one point does
+    // not (tests/test_pvm.py's straight edges and resting walls). The
+    // march's rays still bound k through the plain bound.
+    let control_margin = CONTROL_MARGIN_POINTS / count + band;
+    let controlled = control;
     var reference = k;
-    var margin = map_margin(n);
-    if (control) {
+    if (controlled) {
         var lit = 0.0;
         for (var i = 0u; i < n; i++) {
             let radius = sqrt((f32(i) + 0.5) / count);
@@ -133,30 +166,60 @@ fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f3
             }
         }
         reference = lit / count;
-        margin = CONTROL_MARGIN_POINTS / count;
     }
-    let lo = count * (reference - margin);
-    let hi = select(2.0 * count, count * (reference + margin), lower);
+    // The bounds leave k where, at the end, the rays the search leaves seen
+    // are at least lo_search (the control's upper side; none without it),
+    // those search and march leave seen at least lo (the plain upper side)
+    // and at most hi (the lower side: the control's, else the plain one).
+    let lo_search = select(-1.0, count * (reference - control_margin), controlled);
+    let lo = count * (k - margin);
+    let hi_plain = select(count * (k + margin), count * (reference + control_margin), controlled);
+    let hi = select(2.0 * count, hi_plain, lower);
+    var seen_search = 0.0;
     var seen = 0.0;
     for (var i = 0u; i < n; i++) {
         let radius = sqrt((f32(i) + 0.5) / count);
         let a = f32(i) * GOLDEN_ANGLE;
         let goal = l + r * radius * (cos(a) * disk.e1 + sin(a) * disk.e2);
-        if (!ray_hidden(t, map, p, depth, d_start, goal) && !ray_marched_hidden(t, map, p, depth, goal, march)) {
-            seen += 1.0;
+        if (!ray_hidden(t, map, p, depth, d_start, goal)) {
+            seen_search += 1.0;
+            if (!ray_marched_hidden(t, map, p, depth, goal, march)) {
+                seen += 1.0;
+            }
         }
         // Seen at the end: between these and every ray left besides.
-        if (seen >= lo && seen + count - f32(i + 1u) <= hi) {
+        if (seen_search >= lo_search && seen >= lo && seen + count - f32(i + 1u) <= hi) {
             return k;
         }
     }
-    // k moved by what the rays find beyond the reference (the rays'
-    // fraction itself where the reference is k), within [0, 1].
-    let f = select(seen / count, k + seen / count - reference, control);
-    if (lower) {
-        return clamp(k, max(f - margin, 0.0), min(f + margin, 1.0));
+    // The estimates: the rays' fraction, or with the control k moved by
+    // what the rays find beyond the model. Past its band k is wrong, and the rays' estimate f is the better one:
+    // k goes to f over one more band (continuous where it starts to move).
+    let f = seen / count;
+    var v = toward(k, f, margin);
+    var raised = away(k, f, margin);
+    if (controlled) {
+        v = min(v, toward(k, k + seen_search / count - reference, control_margin));
+        raised = away(k, k + f - reference, control_margin);
     }
-    return min(k, max(f + margin, 0.0));
+    // The lower side acts where the upper one leaves k (it never undoes it).
+    if (lower && v >= k) {
+        v = raised;
+    }
+    v = clamp(v, 0.0, 1.0);
+    return v;
+}
+
+// k where it lies at most `m` above the estimate f; past that, down to f
+// over one more m (2 (f + m) - k, continuous at k = f + m), then f.
+fn toward(k: f32, f: f32, m: f32) -> f32 {
+    return min(k, max(f, 2.0 * (f + m) - k));
+}
+
+// The same from below: k where it lies at most `m` under f; past that, up
+// to f over one more m.
+fn away(k: f32, f: f32, m: f32) -> f32 {
+    return max(k, min(f, 2.0 * (f - m) - k));
 }
 
 // How far the fraction of n spiral points may lie from k before it moves
@@ -173,6 +236,24 @@ fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f3
 fn map_margin(n: u32) -> f32 {
     // n >= 1 (the callers check): pow of a positive base.
     return 1.2 * pow(f32(n), -0.7);
+}
+
+// The fraction of the light's disk whose rays from p (at light depth
+// `depth`) cross the occluder's plane at light depth `d` so near an
+// outline through it that the map may put them on its other side: the map
+// holds each texel's centre, and a point is read at its texel's, at most
+// t / sqrt(2) away (t: the texel's width there). The rays' footprint there
+// is a disk of radius rho = r (depth - d) / (depth - d_light), and the
+// band of that half-width around a straight outline covers at most
+// 2 sqrt(2) t / (pi rho) of it (through its middle), whatever the number
+// of points. At most 2 (then no bound acts): rho = 0 where the occluder
+// lies at p's depth, and a light of radius 0.
+fn texel_band(t: ShadowTest, depth: f32, d: f32, r: f32) -> f32 {
+    let d_light = light_view_depth(t.light_space, t.center.xyz);
+    // depth > d_light: no surface touches the light.
+    let rho = r * max(depth - d, 0.0) / max(depth - d_light, 1e-30);
+    let band = 2.8284271 * light_texel_size(t.light_space, max(d, 0.0)) / (3.14159265 * max(rho, 1e-30));
+    return min(band, 2.0);
 }
 
 // map_control's margin, in points: the map's texel rounding at an

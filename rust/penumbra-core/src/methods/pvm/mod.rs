@@ -92,10 +92,11 @@ pub struct PvmParams {
     /// The map bound (beyond the papers: `map_samples`, `map_bound`,
     /// `map_march`; passes/map_rays.rs).
     pub map: MapBound,
-    /// `map_control` (beyond 4.2, not the default yet): where k is the
-    /// nearest edge's half-plane fraction, the rays are compared with that
+    /// `map_control` (beyond 4.2, the default): where k is the nearest
+    /// edge's half-plane fraction, the rays are compared with that
     /// half-plane at the same points, and k moves only by the points where
-    /// they disagree (`map_bound` in passes/map_rays.wgsl).
+    /// they disagree beyond one point and the map's texel band
+    /// (`map_bound` and `texel_band` in passes/map_rays.wgsl).
     pub map_control: bool,
     pub open_edges: OpenEdges,
     /// Departures from the paper for real meshes (`Repairs`).
@@ -205,17 +206,17 @@ impl MethodParams for PvmParams {
         ]
         .into_iter()
         .chain(MapBound::specs(
-            "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge); 0: the edge's k alone (4.2)",
+            "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge) and the texel band; 0: the edge's k alone (4.2)",
         ))
         .chain([
             // A control variate (issue 28): the spiral's error under a
             // straight edge is shared by the rays and the half-plane, so it
-            // cancels, and the margin can be one point instead of
-            // map_margin's 0.17 at 16 (docs/methods/pvm.md).
+            // cancels, and the margin can be one point and the map's texel
+            // band instead of map_margin's 0.17 at 16 (docs/methods/pvm.md).
             ParamSpec::bool(
                 "map_control",
-                false,
-                "with map_samples > 0, where k is the nearest edge's half-plane fraction (Eq. 4.1): compare the rays with that half-plane at the same points and move k only by the points where they disagree, beyond one point; false: compare them with k, beyond 1.2 n^-0.7",
+                true,
+                "with map_samples > 0, where k is the nearest edge's half-plane fraction (Eq. 4.1): compare the rays with that half-plane at the same points and move k only by the points where they disagree, beyond one point and the texel band (the rays the search leaves seen, without map_march's); false: compare them with k alone, beyond 1.2 n^-0.7 and the texel band",
             ),
             OpenEdges::spec(),
             ParamSpec::choice(

@@ -658,7 +658,7 @@ fn shade(pixel: ScreenPixel) {
                         // edge's line: no model).
                         let cut = cutting_plane(p, edge.h0.xyz, edge.h1.xyz);
                         let model = vec4<f32>(cut.n, dot(cut.n, edge.h0.xyz));
-                        let bounded = map_bound(pvm, shadow_map, p, q.w, d_start, pvm.mode.z, k, lower, pvm.mode.w, model, half_plane && dot(cut.n, cut.n) > 0.5);
+                        let bounded = map_bound(pvm, shadow_map, p, q.w, d_start, pvm.mode.z, k, lower, pvm.mode.w, model, light_view_depth(pvm.light_space, 0.5 * (edge.h0.xyz + edge.h1.xyz)), half_plane && dot(cut.n, cut.n) > 0.5);
                         if (bounded < k) {
                             atomicAdd(&counters[3], 1u);
                         } else if (bounded > k) {

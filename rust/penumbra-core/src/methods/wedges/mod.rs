@@ -214,7 +214,7 @@ impl MethodParams for WedgesParams {
         ]
         .into_iter()
         .chain(MapBound::specs(
-            "inside wedges, points of the light's disk whose rays from the pixel are followed through the shadow map (as pvm's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge); 0: the wedges' sum alone (both papers)",
+            "inside wedges, points of the light's disk whose rays from the pixel are followed through the shadow map (as pvm's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge) and the texel band at the holding edge nearest the light; 0: the wedges' sum alone (both papers)",
         ))
         .chain([
             OpenEdges::spec(),

@@ -422,7 +422,7 @@ fn shade(pixel: ScreenPixel) {
                     d_start = edge_depth;
                 }
                 // The wedges' sum has no one plane to compare the rays with: k itself.
-                let bounded = map_bound(wedge_test, shadow_map, p, q.w, d_start, wedge_test.mode.z, v, lower, wedge_test.mode.w, vec4<f32>(0.0), false);
+                let bounded = map_bound(wedge_test, shadow_map, p, q.w, d_start, wedge_test.mode.z, v, lower, wedge_test.mode.w, vec4<f32>(0.0), edge_depth, false);
                 if (bounded < v) {
                     atomicAdd(&counters[1], 1u);
                 } else if (bounded > v) {
