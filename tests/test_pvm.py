@@ -319,7 +319,7 @@ def test_the_map_bound_leaves_a_straight_edges_exact_light_alone(renderer: penum
         bar = box(centre, extents, yaw_degrees=yaw, object_id=1, name="bar")
         scene = penumbra.Scene([ground_slab(), bar], penumbra.SphereLight((0.0, 6.0, 0.0), radius, intensity=60.0), camera)
         alone = renderer.render(scene, method, map_samples=0).visibility
-        for params in ({}, {"map_march": 0}, {"map_control": True} if method == "pvm" else {"map_samples": 32}):
+        for params in ({}, {"map_march": 0}, {"map_control": True} if method == "pvm" else {"map_samples": 16}):
             bounded = renderer.render(scene, method, **params)
             what = f"height {height}, radius {radius}, yaw {yaw}, {params}"
             np.testing.assert_array_equal(bounded.visibility, alone, err_msg=what)
@@ -346,7 +346,7 @@ def test_the_map_rays_pass_beside_a_wall_the_light_sees_edge_on(renderer: penumb
         wall = box((0.0, height / 2, 0.0), (8.0, height, 0.2), yaw_degrees=yaw, object_id=1, name="wall")
         scene = penumbra.Scene([ground_slab(), wall], penumbra.SphereLight((0.0, 6.0, light_z), radius, intensity=60.0), side)
         alone = renderer.render(scene, method, map_samples=0).visibility
-        for params in ({}, {"map_control": True} if method == "pvm" else {"map_samples": 32}):
+        for params in ({}, {"map_control": True} if method == "pvm" else {"map_samples": 16}):
             bounded = renderer.render(scene, method, **params)
             what = f"light z {light_z}, radius {radius}, yaw {yaw}, height {height}, {params}"
             np.testing.assert_array_equal(bounded.visibility, alone, err_msg=what)

@@ -4,8 +4,9 @@
 
 use crate::params::{ParamSet, ParamSpec};
 
-/// `map_samples`' default: 16 points (32 lower the generated median further
-/// at about 1.4 times the visibility pass: docs/methods/pvm.md).
+/// `pvm`'s `map_samples` default: 16 points (32 lower the generated median
+/// further, 0.0802 -> 0.0728, at 2.57 against 2.16 times `hard`:
+/// docs/methods/pvm.md). `wedges` takes 32 (`methods/wedges/mod.rs`).
 pub const SAMPLES_DEFAULT: i64 = 16;
 /// `map_march`'s default: 8 light depths (4 and 16 did worse: docs/methods/pvm.md).
 pub const MARCH_DEFAULT: i64 = 8;
@@ -25,11 +26,12 @@ pub struct MapBound {
 }
 
 impl MapBound {
-    /// The three parameters; `samples_doc` says what the bound bounds and
-    /// what 0 leaves (the method's own visibility).
-    pub fn specs(samples_doc: &'static str) -> [ParamSpec; 3] {
+    /// The three parameters; `samples` is the method's default number of
+    /// points, `samples_doc` says what the bound bounds and what 0 leaves
+    /// (the method's own visibility).
+    pub fn specs(samples: i64, samples_doc: &'static str) -> [ParamSpec; 3] {
         [
-            ParamSpec::int("map_samples", SAMPLES_DEFAULT, 0, 256, samples_doc),
+            ParamSpec::int("map_samples", samples, 0, 256, samples_doc),
             // Where the map sees the light's centre, an edge model may hide
             // more of the light than the caster does (the far tip of a
             // grazing shadow, where the caster ends along its edge). Where

@@ -15,7 +15,7 @@
 //! in a sliver rather than a shared extrusion vector: never NaN, at most a
 //! thin gap where the shadow-map test takes over. `stats` counts such vertices.
 
-use crate::passes::map_rays::MapBound;
+use crate::passes::map_rays::{self, MapBound};
 use std::sync::Arc;
 
 use glam::DVec3;
@@ -206,6 +206,7 @@ impl MethodParams for PvmParams {
         ]
         .into_iter()
         .chain(MapBound::specs(
+            map_rays::SAMPLES_DEFAULT,
             "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge) and the texel band; 0: the edge's k alone (4.2)",
         ))
         .chain([
