@@ -5,7 +5,7 @@
 use crate::params::{ParamSet, ParamSpec};
 
 /// `pvm`'s `map_samples` default: 16 points (32 lower the generated median
-/// further, 0.0802 -> 0.0728, at 2.57 against 2.16 times `hard`:
+/// further, 0.0802 -> 0.0728, at 2.42 against 2.23 times `hard`:
 /// docs/methods/pvm.md). `wedges` takes 32 (`methods/wedges/mod.rs`).
 pub const SAMPLES_DEFAULT: i64 = 16;
 /// `map_march`'s default: 8 light depths (4 and 16 did worse: docs/methods/pvm.md).

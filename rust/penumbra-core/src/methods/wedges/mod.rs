@@ -39,7 +39,7 @@ use std::sync::Arc;
 /// `map_samples`' default for the wedges: 32 points. The wedges' sum is
 /// further from the truth than pvm's edge (no one plane to control the
 /// rays with), so the rays' own error counts for more: with 32 the
-/// generated median is 0.0732 -> 0.0625 at 2.37 against 2.16 times `hard`,
+/// generated median is 0.0732 -> 0.0625 at 2.57 against 2.20 times `hard`,
 /// and the slow suite's 0.0695 -> 0.0591, lower on 46 of its 60 scenes,
 /// higher on 3 (docs/methods/wedges.md).
 const MAP_SAMPLES_DEFAULT: i64 = 32;
