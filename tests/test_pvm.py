@@ -257,7 +257,9 @@ def test_the_map_bound_finds_the_second_caster_one_edge_misses(renderer: penumbr
     moved = region & (np.abs(bounded.visibility - alone.visibility) > 1e-6)
     rmse = lambda v, m: float(np.sqrt(((v - truth)[m] ** 2).mean()))
     assert rmse(bounded.visibility, region) < 0.8 * rmse(alone.visibility, region), (rmse(alone.visibility, region), rmse(bounded.visibility, region))
-    assert moved.sum() > 250 and rmse(bounded.visibility, moved) < 0.65 * rmse(alone.visibility, moved), (moved.sum(), rmse(alone.visibility, moved), rmse(bounded.visibility, moved))
+    # 0.33 of 4.2's error on the pixels it moves; 0.53 when k stopped at the
+    # band's edge (before `toward`), which this bound of 0.45 refuses.
+    assert moved.sum() > 250 and rmse(bounded.visibility, moved) < 0.45 * rmse(alone.visibility, moved), (moved.sum(), rmse(alone.visibility, moved), rmse(bounded.visibility, moved))
     assert (bounded.visibility <= alone.visibility + 1e-6).all()
     assert bounded.stats["map_bounded_pixels"] > 250 and alone.stats["map_bounded_pixels"] == 0, (bounded.stats, alone.stats)
 

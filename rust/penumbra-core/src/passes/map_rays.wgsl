@@ -154,9 +154,8 @@ fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f3
     // not (tests/test_pvm.py's straight edges and resting walls). The
     // march's rays still bound k through the plain bound.
     let control_margin = CONTROL_MARGIN_POINTS / count + band;
-    let controlled = control;
     var reference = k;
-    if (controlled) {
+    if (control) {
         var lit = 0.0;
         for (var i = 0u; i < n; i++) {
             let radius = sqrt((f32(i) + 0.5) / count);
@@ -171,9 +170,9 @@ fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f3
     // are at least lo_search (the control's upper side; none without it),
     // those search and march leave seen at least lo (the plain upper side)
     // and at most hi (the lower side: the control's, else the plain one).
-    let lo_search = select(-1.0, count * (reference - control_margin), controlled);
+    let lo_search = select(-1.0, count * (reference - control_margin), control);
     let lo = count * (k - margin);
-    let hi_plain = select(count * (k + margin), count * (reference + control_margin), controlled);
+    let hi_plain = select(count * (k + margin), count * (reference + control_margin), control);
     let hi = select(2.0 * count, hi_plain, lower);
     var seen_search = 0.0;
     var seen = 0.0;
@@ -193,12 +192,13 @@ fn map_bound(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f3
         }
     }
     // The estimates: the rays' fraction, or with the control k moved by
-    // what the rays find beyond the model. Past its band k is wrong, and the rays' estimate f is the better one:
-    // k goes to f over one more band (continuous where it starts to move).
+    // what the rays find beyond the model. Past its band k is wrong and the
+    // estimate is the better one: k goes to it over one more band
+    // (continuous where it starts to move).
     let f = seen / count;
     var v = toward(k, f, margin);
     var raised = away(k, f, margin);
-    if (controlled) {
+    if (control) {
         v = min(v, toward(k, k + seen_search / count - reference, control_margin));
         raised = away(k, k + f - reference, control_margin);
     }
@@ -252,7 +252,7 @@ fn texel_band(t: ShadowTest, depth: f32, d: f32, r: f32) -> f32 {
     let d_light = light_view_depth(t.light_space, t.center.xyz);
     // depth > d_light: no surface touches the light.
     let rho = r * max(depth - d, 0.0) / max(depth - d_light, 1e-30);
-    let band = 2.8284271 * light_texel_size(t.light_space, max(d, 0.0)) / (3.14159265 * max(rho, 1e-30));
+    let band = 2.0 * sqrt(2.0) * light_texel_size(t.light_space, max(d, 0.0)) / (PI * max(rho, 1e-30));
     return min(band, 2.0);
 }
 

@@ -649,16 +649,17 @@ fn shade(pixel: ScreenPixel) {
                     // seen at the edge.
                     let lower = (pvm.mode.y & 128u) != 0u && centre_lit;
                     if (pvm.mode.z > 0u && (k > map_margin(pvm.mode.z) || lower)) {
+                        let edge_depth = light_view_depth(pvm.light_space, 0.5 * (edge.h0.xyz + edge.h1.xyz));
                         var d_start = centre_depth;
                         if (centre_lit) {
-                            d_start = light_view_depth(pvm.light_space, 0.5 * (edge.h0.xyz + edge.h1.xyz));
+                            d_start = edge_depth;
                         }
                         // Points x on the lit side of the edge's cutting plane:
                         // dot(n, x) > dot(n, h0) (n = 0 where p lies on the
                         // edge's line: no model).
                         let cut = cutting_plane(p, edge.h0.xyz, edge.h1.xyz);
                         let model = vec4<f32>(cut.n, dot(cut.n, edge.h0.xyz));
-                        let bounded = map_bound(pvm, shadow_map, p, q.w, d_start, pvm.mode.z, k, lower, pvm.mode.w, model, light_view_depth(pvm.light_space, 0.5 * (edge.h0.xyz + edge.h1.xyz)), half_plane && dot(cut.n, cut.n) > 0.5);
+                        let bounded = map_bound(pvm, shadow_map, p, q.w, d_start, pvm.mode.z, k, lower, pvm.mode.w, model, edge_depth, half_plane && dot(cut.n, cut.n) > 0.5);
                         if (bounded < k) {
                             atomicAdd(&counters[3], 1u);
                         } else if (bounded > k) {
