@@ -34,6 +34,11 @@ struct WedgeSettings {
     // bit 6: map_bound "both"); w: wedge count. wedge_test.mode.z: map_samples;
     // wedge_test.mode.w: map_march.
     tiles: vec4<u32>,
+    // subsample (beyond both papers, issue 30): x: the largest shift, in
+    // light radii, of any projected edge between a pixel and the coarse
+    // pixels it is interpolated from (0: every pixel computed); y: the
+    // coarse grid's width (f32).
+    subsample: vec4<f32>,
 };
 
 @group(0) @binding(2) var shadow_map: texture_depth_2d_array;
@@ -45,8 +50,8 @@ struct WedgeSettings {
 @group(0) @binding(8) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var hard_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(10) var intensity_out: texture_storage_2d<r32float, write>;
-// pixels_in_wedge, map_bounded_pixels, map_raised_pixels (COUNTER_NAMES in mod.rs).
-@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>, 3>;
+// pixels_in_wedge, map_bounded_pixels, map_raised_pixels, interpolated_pixels (COUNTER_NAMES in mod.rs).
+@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>, 4>;
 // The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
 @group(0) @binding(12) var object_map: texture_2d_array<u32>;
 @group(0) @binding(13) var<storage, read> mesh_objects: array<u32>;
@@ -54,6 +59,21 @@ struct WedgeSettings {
 // (tile_cull.wgsl) found the wedge holds no pixel of that quarter (its term
 // is zero at every one).
 @group(0) @binding(14) var<storage, read> tile_keep: array<u32>;
+// subsample > 0: the results of the pixels with even x and y, two entries
+// each: `Evaluated`'s v, hard, intensity, kappa, then its reach, inside and
+// whether it may be interpolated from (see `interpolated`).
+@group(0) @binding(15) var<storage, read_write> coarse: array<vec4<f32>>;
+
+// subsample > 0: the pixels that `interpolated` refused, which
+// middle_fallback_main or fallback_main evaluates (an indirect dispatch, so
+// that its workgroups hold only such pixels): the dispatch's workgroup
+// counts (x, y, z), their number, then the pixels (y << 16 | x).
+struct PixelList {
+    groups: array<atomic<u32>, 3>,
+    count: atomic<u32>,
+    pixels: array<u32>,
+};
+@group(0) @binding(16) var<storage, read_write> list: PixelList;
 
 // Eq. 1-2 along the side ray u: p's distances to the front plane (F <= 0
 // inside) and the back plane (B >= 0 inside), as fractions of the chord.
@@ -185,7 +205,15 @@ fn light_disk(p: vec3<f32>, c: vec3<f32>, r: f32) -> Disk {
 // projected edge meets the disk (y = 1). Summed over a closed loop with the
 // hard shadow, the terms give the disk's covered fraction exactly (the fan
 // of the projected polygon about c); there is no interpolation.
-fn coverage_term(index: u32, p: vec3<f32>, disk: Disk) -> vec2<f32> {
+//
+// subsample (reach > 0): *kappa is raised to this edge's sensitivity, the
+// shift of its projection in disk radii per world unit p moves ((dist -
+// d) / (d radius) at its nearest end's depth d: the projection from p of a
+// point at depth d moves by (dist / d - 1) times p's move, relative to the
+// disk), where the edge can meet the disk within `reach` of p; to
+// infinity where an end lies within reach of p's depth 0 or of the light's
+// plane (a contact, whose projection is unbounded).
+fn coverage_term(index: u32, p: vec3<f32>, disk: Disk, reach: f32, kappa: ptr<function, f32>) -> vec2<f32> {
     // p inside (or on) the light: nothing to project.
     if (disk.radius <= 0.0) {
         return vec2<f32>(0.0, 0.0);
@@ -205,6 +233,10 @@ fn coverage_term(index: u32, p: vec3<f32>, disk: Disk) -> vec2<f32> {
     // front of the light; here a receiver beyond the light, as a room's
     // wall behind a light beside a block, took half the light off).
     if ((da < eps && db < eps) || (da > dist && db > dist)) {
+        // p's move changes depths, and dist, by at most its length.
+        if (reach > 0.0 && select(min(da, db) < dist + 2.0 * reach, max(da, db) > -reach, da < eps && db < eps)) {
+            *kappa = 3.4e38;
+        }
         return vec2<f32>(0.0, 0.0);
     }
     // Clip to depth >= eps in front of p (db - da != 0 when exactly one end is behind).
@@ -232,13 +264,19 @@ fn coverage_term(index: u32, p: vec3<f32>, disk: Disk) -> vec2<f32> {
     let pa = vec2<f32>(dot(qa, e1), dot(qa, e2)) / radius;
     let pb = vec2<f32>(dot(qb, e1), dot(qb, e2)) / radius;
     let e = pb - pa;
-    if (dot(e, e) <= 1e-12) {
-        return vec2<f32>(0.0, 0.0);
-    }
-    // Whether the projected edge meets the disk: its distance to the centre below 1.
-    let t = clamp(-dot(pa, e) / dot(e, e), 0.0, 1.0);
+    // Whether the projected edge meets the disk: its distance to the centre
+    // below 1 (a degenerate projection, a point, has no term).
+    let t = clamp(-dot(pa, e) / max(dot(e, e), 1e-30), 0.0, 1.0);
     let closest = pa + e * t;
-    if (dot(closest, closest) >= 1.0) {
+    if (reach > 0.0) {
+        // da, db >= eps > 0 after the clip; radius > 0 (checked above).
+        let d_near = min(da, db);
+        let k = (dist - d_near) / (d_near * radius);
+        if (length(closest) < 1.0 + k * reach) {
+            *kappa = max(*kappa, k);
+        }
+    }
+    if (dot(e, e) <= 1e-12 || dot(closest, closest) >= 1.0) {
         return vec2<f32>(0.0, 0.0);
     }
     let beyond = beyond_segment(pa, pb) / 3.14159265;
@@ -280,12 +318,30 @@ fn fold_object(o: Objects, s: f32) -> Objects {
     return out;
 }
 
-// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
-fn shade(pixel: ScreenPixel) {
+// One pixel's result. kappa, reach and usable serve subsample: the
+// largest sensitivity of an edge that can meet the disk within `reach`
+// (world units) of p (see coverage_term), and whether the pixel may be
+// interpolated from (its centre above the horizon).
+struct Evaluated {
+    v: f32,
+    hard: f32,
+    intensity: f32,
+    kappa: f32,
+    reach: f32,
+    inside: bool,
+    usable: bool,
+};
+
+// The visibility of one pixel: the wedges' sum (and its bounds). reach > 0
+// also measures the pixel's kappa for subsample.
+fn evaluate(pixel: ScreenPixel, reach: f32) -> Evaluated {
     let px = pixel.px;
     var v = 0.0;
     var hard = 0.0;
     var intensity = 0.0;
+    var kappa = 0.0;
+    var usable = false;
+    var inside = false;
     if (pixel.geometry) {
         let p = pixel.p;
         let n = pixel.n;
@@ -314,7 +370,6 @@ fn shade(pixel: ScreenPixel) {
             let quarter = quarter_of.y * 2u + quarter_of.x;
             let start = tile_offsets[t];
             let end = tile_offsets[t + 1u];
-            var inside = false;
             let disk = light_disk(p, wedge_test.center.xyz, r);
             let independent = (settings.tiles.z & 32u) != 0u;
             var objects = Objects(1.0, 1.0, false);
@@ -332,7 +387,7 @@ fn shade(pixel: ScreenPixel) {
                 let index = tile_wedges[i];
                 var term: vec2<f32>;
                 if ((settings.tiles.z & 8u) != 0u) {
-                    term = coverage_term(index, p, disk);
+                    term = coverage_term(index, p, disk, reach, &kappa);
                 } else {
                     term = wedge_term(wedges[index], p);
                 }
@@ -433,13 +488,241 @@ fn shade(pixel: ScreenPixel) {
             if (horizon) {
                 v = min(v, k_h);
             }
+            usable = true;
         } else if (horizon) {
             // Only the sliver above the horizon, unless another object hides the centre.
             let own = mesh_objects[min(u32(pixel.normal_texel.w), arrayLength(&mesh_objects) - 1u)];
             v = select(0.0, k_h, horizon_sliver_seen(wedge_test, object_map, p, own));
         }
     }
+    return Evaluated(v, hard, intensity, kappa, reach, inside, usable);
+}
+
+fn store(px: vec2<i32>, v: f32, hard: f32, intensity: f32) {
     textureStore(visibility_out, px, vec4<f32>(v, 0.0, 0.0, 0.0));
     textureStore(hard_out, px, vec4<f32>(hard, 0.0, 0.0, 0.0));
     textureStore(intensity_out, px, vec4<f32>(intensity, 0.0, 0.0, 0.0));
+}
+
+// subsample (beyond both papers, issue 30: cost that follows the
+// penumbra), a cascade over three grids: the pixels with x and y multiples
+// of 4 (the top), of 2 (the middle) and all. coarse_main evaluates the top;
+// middle_main gives each other pixel of the middle the mean of its top
+// neighbours 2 pixels away (`interpolated`) or lists it, and
+// middle_fallback_main evaluates the listed; main then does the same for
+// the remaining pixels from the middle's, and fallback_main evaluates the
+// pixels it lists. The middle's results (`coarse`) carry kappa and reach
+// down: an interpolated pixel takes its neighbours' largest kappa and the
+// least of their reaches less its distance to them.
+
+// Index of the `coarse` record of a pixel with even x and y.
+fn record(q: vec2<i32>) -> u32 {
+    return 2u * (u32(q.y / 2) * u32(settings.subsample.y) + u32(q.x / 2));
+}
+
+fn store_record(q: vec2<i32>, v: f32, hard: f32, intensity: f32, kappa: f32, reach: f32, inside: bool) {
+    let i = record(q);
+    coarse[i] = vec4<f32>(v, hard, intensity, kappa);
+    coarse[i + 1u] = vec4<f32>(reach, select(0.0, 1.0, inside), 1.0, 0.0);
+}
+
+// A pixel's evaluation for the grids below it: reach is the distance to the
+// farthest of its four diagonal neighbours `spread` pixels away (the pixels
+// it may serve lie within it on a flat receiver; `interpolated` checks).
+fn evaluate_record(pixel: ScreenPixel, spread: i32) {
+    let size = vec2<i32>(textureDimensions(gbuffer_normal));
+    var reach = 0.0;
+    if (pixel.geometry) {
+        for (var k = 0; k < 4; k = k + 1) {
+            let q = clamp(pixel.px + spread * vec2<i32>(2 * (k % 2) - 1, 2 * (k / 2) - 1), vec2<i32>(0), size - 1);
+            if (!is_background(textureLoad(gbuffer_normal, q, 0))) {
+                reach = max(reach, distance(textureLoad(gbuffer_position, q, 0).xyz, pixel.p));
+            }
+        }
+    }
+    // A pixel alone (no geometry around it) still gets a reach > 0, so that kappa is measured.
+    let e = evaluate(pixel, max(reach, 1e-30));
+    let i = record(pixel.px);
+    coarse[i] = vec4<f32>(e.v, e.hard, e.intensity, e.kappa);
+    coarse[i + 1u] = vec4<f32>(e.reach, select(0.0, 1.0, e.inside), select(0.0, 1.0, e.usable), 0.0);
+}
+
+@compute @workgroup_size(8, 8)
+fn coarse_main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let pixel = screen_pixel(vec3<u32>(4u * id.xy, 0u));
+    if (pixel.inside) {
+        evaluate_record(pixel, 4);
+    }
+}
+
+struct Interpolated {
+    ok: bool,
+    v: f32,
+    hard: f32,
+    intensity: f32,
+    inside: bool,
+    kappa: f32,
+    reach: f32,
+};
+
+// Whether a pixel of the grid of spacing `stride` (1 or 2), not on the one
+// above it, may take the mean of its two (one coordinate an odd multiple of
+// stride) or four (both) neighbours on that grid, stride pixels away, and
+// that mean. It may where every neighbour lies on the pixel's own object
+// and plane (same object, normals within 8 degrees, off its plane by at
+// most 2% of their distance), has the centre above its horizon, holds the
+// pixel within its reach and has kappa times its distance to the pixel at
+// most subsample.x (every edge that can meet the disk near either moves by
+// at most that many light radii between them, so that the visibility,
+// Lipschitz in the edges' shift, is smooth there), the neighbours' values
+// differ by no more than that allows, and the map gives the pixel the
+// neighbours' hard term. Every edge with a term at the pixel is
+// in the tile list of its left or upper neighbour, in its 8 x 8 quarter
+// (quarters start at multiples of 8), whose kappa then counts it.
+fn interpolated(pixel: ScreenPixel, stride: i32) -> Interpolated {
+    var out = Interpolated(false, 0.0, 0.0, 0.0, false, 0.0, 3.4e38);
+    let px = pixel.px;
+    let size = vec2<i32>(textureDimensions(gbuffer_normal));
+    let odd = (px / stride) % 2;
+    if (!pixel.geometry || px.x + stride * odd.x >= size.x || px.y + stride * odd.y >= size.y) {
+        return out;
+    }
+    let cos_theta = light_cosine(wedge_test, pixel.p, pixel.n);
+    if (cos_theta <= 0.0) {
+        return out;
+    }
+    var sum = vec2<f32>(0.0);
+    var count = 0.0;
+    var hard = -1.0;
+    var lowest = 1.0;
+    var highest = 0.0;
+    for (var k = 0; k < 4; k = k + 1) {
+        let step = vec2<i32>(k % 2, k / 2);
+        // Skip the second of a pair along an even axis (two neighbours, not four).
+        if (any(step > odd)) {
+            continue;
+        }
+        let q = px + stride * (2 * step - odd);
+        let texel = textureLoad(gbuffer_normal, q, 0);
+        if (is_background(texel) || texel.w != pixel.normal_texel.w || dot(texel.xyz, pixel.n) < 0.99) {
+            return out;
+        }
+        let offset = textureLoad(gbuffer_position, q, 0).xyz - pixel.p;
+        let d = length(offset);
+        if (abs(dot(offset, pixel.n)) > 0.02 * d) {
+            return out;
+        }
+        let i = record(q);
+        let a = coarse[i];
+        let b = coarse[i + 1u];
+        if (b.z == 0.0 || d > b.x || a.w * d > settings.subsample.x || (hard >= 0.0 && a.y != hard)) {
+            return out;
+        }
+        hard = a.y;
+        out.inside = out.inside || b.y > 0.0;
+        out.kappa = max(out.kappa, a.w);
+        out.reach = min(out.reach, b.x - d);
+        sum = sum + a.xz;
+        count = count + 1.0;
+        lowest = min(lowest, a.x);
+        highest = max(highest, a.x);
+    }
+    // Neighbours further apart than a shift of 2 subsample.x allows (4 / pi
+    // of the disk per radius the silhouette moves as a whole): one of them
+    // is off (a stray pixel of the gate or the map's rays), and its mean
+    // would spread it.
+    if (highest - lowest > 2.0 * (4.0 / 3.14159265) * settings.subsample.x) {
+        return out;
+    }
+    let r = biased_receiver(wedge_test, pixel.p, pixel.n, cos_theta);
+    let own = select(0.0, 1.0, r.w <= map_depth(wedge_test, shadow_map, r.xyz));
+    if (own != hard) {
+        return out;
+    }
+    out.ok = true;
+    out.v = sum.x / count;
+    out.hard = hard;
+    out.intensity = sum.y / count;
+    if (out.inside) {
+        atomicAdd(&counters[0], 1u);
+    }
+    atomicAdd(&counters[3], 1u);
+    return out;
+}
+
+fn list_pixel(px: vec2<i32>) {
+    let index = atomicAdd(&list.count, 1u);
+    list.pixels[index] = (u32(px.y) << 16u) | u32(px.x);
+    // Workgroups of 64 pixels, at most 65535 along x.
+    let group = index / 64u;
+    atomicMax(&list.groups[0], min(group + 1u, 65535u));
+    atomicMax(&list.groups[1], group / 65535u + 1u);
+    atomicMax(&list.groups[2], 1u);
+}
+
+// The listed pixel of a fallback dispatch's invocation, if any.
+fn listed_pixel(group: vec3<u32>, groups: vec3<u32>, local: u32) -> ScreenPixel {
+    let index = (group.y * groups.x + group.x) * 64u + local;
+    if (index >= atomicLoad(&list.count)) {
+        var none: ScreenPixel;
+        none.inside = false;
+        return none;
+    }
+    let packed = list.pixels[index];
+    return screen_pixel(vec3<u32>(packed & 0xffffu, packed >> 16u, 0u));
+}
+
+@compute @workgroup_size(8, 8)
+fn middle_main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let pixel = screen_pixel(vec3<u32>(2u * id.xy, 0u));
+    if (!pixel.inside || all(pixel.px % 4 == vec2<i32>(0))) {
+        return;
+    }
+    let m = interpolated(pixel, 2);
+    if (m.ok) {
+        store_record(pixel.px, m.v, m.hard, m.intensity, m.kappa, m.reach, m.inside);
+    } else {
+        list_pixel(pixel.px);
+    }
+}
+
+@compute @workgroup_size(64)
+fn middle_fallback_main(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    let pixel = listed_pixel(group, groups, local);
+    if (pixel.inside) {
+        evaluate_record(pixel, 2);
+    }
+}
+
+// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+// With subsample, the middle grid's pixels take their records, and the
+// others their neighbours' mean (`interpolated`) or a place in the list.
+fn shade(pixel: ScreenPixel) {
+    let px = pixel.px;
+    if (settings.subsample.x > 0.0) {
+        if (all(px % 2 == vec2<i32>(0))) {
+            let a = coarse[record(px)];
+            store(px, a.x, a.y, a.z);
+            return;
+        }
+        let m = interpolated(pixel, 1);
+        if (m.ok) {
+            store(px, m.v, m.hard, m.intensity);
+        } else {
+            list_pixel(px);
+        }
+        return;
+    }
+    let e = evaluate(pixel, 0.0);
+    store(px, e.v, e.hard, e.intensity);
+}
+
+// subsample: the listed pixels, evaluated.
+@compute @workgroup_size(64)
+fn fallback_main(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    let pixel = listed_pixel(group, groups, local);
+    if (pixel.inside) {
+        let e = evaluate(pixel, 0.0);
+        store(pixel.px, e.v, e.hard, e.intensity);
+    }
 }
