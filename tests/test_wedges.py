@@ -182,8 +182,10 @@ def test_subsample_interpolates_where_the_penumbra_is_smooth(renderer: penumbra.
     sub = renderer.render(scene, "wedges")
     every = renderer.render(scene, "wedges", subsample=0.0)
     assert every.stats["interpolated_pixels"] == 0
-    # Three quarters of the pixels are off the coarse grid; most of those are interpolated.
-    assert sub.stats["interpolated_pixels"] > 0.25 * 128 * 128, sub.stats
+    # Three quarters of the pixels are off the coarse grid, and those of
+    # tiles without wedges are evaluated at once (their map read alone):
+    # measured 4,019-6,962 interpolated of 16,384.
+    assert sub.stats["interpolated_pixels"] > 0.2 * 128 * 128, sub.stats
     largest, rms = SUBSAMPLE_BOUNDS[name]
     d = sub.visibility - every.visibility
     v = every.visibility
@@ -204,6 +206,23 @@ def test_subsample_keeps_narrow_penumbrae_computed(renderer: penumbra.Renderer) 
     sub = renderer.render(scene, "wedges")
     every = renderer.render(scene, "wedges", subsample=0.0)
     np.testing.assert_array_equal(sub.visibility, every.visibility)
+
+
+def test_subsample_moves_no_pixel_far_on_generated_scenes(renderer: penumbra.Renderer) -> None:
+    """On the 40 generated scenes at 96x96, subsample moves no pixel by
+    more than 0.2 from every pixel computed (measured: 0.161 at most, seed
+    35). Without the check that neighbours differ by no more than the
+    shift bound allows, the mean spread the gate's and the rays' stray
+    pixels: 0.546 on seed 1, 0.460 on seed 20 (a build without it)."""
+    from penumbra import scenes
+
+    if scenes.meshes_folder() is None:
+        pytest.skip("the shared meshes are absent")
+    for seed in range(40):
+        scene = scenes.generate(seed, width=96)
+        sub = renderer.render(scene, "wedges").visibility
+        every = renderer.render(scene, "wedges", subsample=0.0).visibility
+        assert np.abs(sub - every).max() <= 0.2, (seed, float(np.abs(sub - every).max()))
 
 
 def test_degenerate_silhouettes_stay_finite_and_in_0_1(renderer: penumbra.Renderer) -> None:

@@ -650,6 +650,14 @@ fn interpolated(pixel: ScreenPixel, stride: i32) -> Interpolated {
     return out;
 }
 
+// Whether the pixel's screen tile binned no wedge: its evaluation is the
+// map's hard term alone, cheaper than `interpolated`'s checks.
+fn bin_empty(px: vec2<i32>) -> bool {
+    let tile = vec2<u32>(px) / settings.tiles.x;
+    let t = tile.y * settings.tiles.y + tile.x;
+    return tile_offsets[t] == tile_offsets[t + 1u];
+}
+
 fn list_pixel(px: vec2<i32>) {
     let index = atomicAdd(&list.count, 1u);
     list.pixels[index] = (u32(px.y) << 16u) | u32(px.x);
@@ -678,6 +686,10 @@ fn middle_main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (!pixel.inside || all(pixel.px % 4 == vec2<i32>(0))) {
         return;
     }
+    if (bin_empty(pixel.px)) {
+        evaluate_record(pixel, 2);
+        return;
+    }
     let m = interpolated(pixel, 2);
     if (m.ok) {
         store_record(pixel.px, m.v, m.hard, m.intensity, m.kappa, m.reach, m.inside);
@@ -696,7 +708,8 @@ fn middle_fallback_main(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_wo
 
 // Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
 // With subsample, the middle grid's pixels take their records, and the
-// others their neighbours' mean (`interpolated`) or a place in the list.
+// others their neighbours' mean (`interpolated`) or a place in the list,
+// but for those of tiles without wedges, evaluated at once.
 fn shade(pixel: ScreenPixel) {
     let px = pixel.px;
     if (settings.subsample.x > 0.0) {
@@ -705,13 +718,15 @@ fn shade(pixel: ScreenPixel) {
             store(px, a.x, a.y, a.z);
             return;
         }
-        let m = interpolated(pixel, 1);
-        if (m.ok) {
-            store(px, m.v, m.hard, m.intensity);
-        } else {
-            list_pixel(px);
+        if (!bin_empty(px)) {
+            let m = interpolated(pixel, 1);
+            if (m.ok) {
+                store(px, m.v, m.hard, m.intensity);
+            } else {
+                list_pixel(px);
+            }
+            return;
         }
-        return;
     }
     let e = evaluate(pixel, 0.0);
     store(px, e.v, e.hard, e.intensity);
