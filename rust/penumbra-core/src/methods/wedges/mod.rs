@@ -45,13 +45,14 @@ use std::sync::Arc;
 const MAP_SAMPLES_DEFAULT: i64 = 32;
 
 /// `subsample`'s default: 0.1 light radii. On the bench's 28 scenes at
-/// 256x256 it took `wedges`' worst time from 20.8 to 9.3 times `hard`'s
-/// (generated:1, a light as wide as its mesh) and its median from 3.05 to
-/// 2.94, with the median penumbra RMSE 0.0559 -> 0.0544 (lower on 9
-/// scenes, higher on none by more than 0.001: stray pixels no longer
+/// 256x256 it took `wedges`' worst time from 20.9 to 9.9 times `hard`'s
+/// (generated:1, a light as wide as its mesh), the whole render 0.97 times
+/// as long at the median scene (0.45-1.64: a few ms more where little is
+/// interpolated), with the median penumbra RMSE 0.0559 -> 0.0544 (lower on
+/// 8 scenes, higher on none by more than 0.001: stray pixels no longer
 /// reproduced); on the generated suite at 96x96 the median stays 0.0625
 /// (lower on 3, higher on none), on the slow suite 0.0591 -> 0.0584 (lower
-/// on 14, higher on none). At 0.05: 11.9 times at worst
+/// on 14, higher on none). At 0.05: 11.7 times at worst
 /// (docs/methods/wedges.md).
 const SUBSAMPLE_DEFAULT: f64 = 0.1;
 
