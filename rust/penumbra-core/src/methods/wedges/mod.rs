@@ -243,7 +243,7 @@ impl MethodParams for WedgesParams {
                 SUBSAMPLE_DEFAULT,
                 0.0,
                 1.0,
-                "beyond the papers, with intensity \"coverage\": the pixels with even x and y are computed first, and another pixel takes the mean of its 2 or 4 such neighbours where they lie on its surface, its map reads their hard shadow, and no edge that can meet the light's disk near them moves, projected from the pixel, by more than this many light radii between them (the visibility is then smooth there); 0: every pixel computed; with intensity \"interpolation\" every pixel is computed (docs/methods/wedges.md)",
+                "beyond the papers, with intensity \"coverage\": the pixels with x and y multiples of 4 are computed first; then each other pixel of the 2-pixel grid, and then each remaining pixel, takes the mean of its 2 or 4 neighbours on the grid above where they lie on its surface, its map reads their hard shadow, their values agree, and no edge that can meet the light's disk near them moves, projected from the pixel, by more than this many light radii between them (the visibility is then smooth there), and is computed otherwise; 0: every pixel computed; with intensity \"interpolation\" every pixel is computed (docs/methods/wedges.md)",
             ),
         ]
         .into_iter()
