@@ -332,6 +332,15 @@ impl Method for PenumbraWedges {
         let visibility = frame.ctx.screen_texture("wedges::visibility");
         let hard = frame.ctx.screen_texture("wedges::hard");
         let intensity = frame.ctx.screen_texture("wedges::intensity");
+        // subsample: the records of the pixels with even x and y (two vec4
+        // each) and the list of pixels to evaluate, checked against the
+        // adapter's storage-buffer limit before any is made.
+        let subsampled = params.intensity == Intensity::Coverage && params.subsample > 0.0;
+        let (width, height) = (u64::from(frame.ctx.size.0), u64::from(frame.ctx.size.1));
+        let coarse_len = if subsampled { 32 * width.div_ceil(2) * height.div_ceil(2) } else { 32 };
+        let list_len = if subsampled { 16 + 4 * width * height } else { 32 };
+        frame.ctx.check_buffer("wedges", "subsample's records of the even pixels", coarse_len, "the image size, or set subsample=0")?;
+        frame.ctx.check_buffer("wedges", "subsample's list of pixels to evaluate", list_len, "the image size, or set subsample=0")?;
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
             let counter = ctx.counters("wedges::pixels_in_wedge", 4, encoder);
             let kept = ctx.counters("wedges::tiles_kept", 1, encoder);
@@ -347,15 +356,13 @@ impl Method for PenumbraWedges {
             [shadow_test.mode[2], shadow_test.mode[3]] = params.map.mode();
             let test = ctx.parameters("wedges::shadow_test", &shadow_test);
             // subsample: the records of the pixels with even x and y, two vec4 each.
-            let subsample = if coverage { params.subsample as f32 } else { 0.0 };
+            let subsample = if subsampled { params.subsample as f32 } else { 0.0 };
             let (coarse_w, coarse_h) = (ctx.size.0.div_ceil(2), ctx.size.1.div_ceil(2));
             let settings = ctx.parameters(
                 "wedges::settings",
                 &WedgeSettingsUniform { tiles: [TILE, wedges.tiles_x, flags, wedges.count], subsample: [subsample, coarse_w as f32, 0.0, 0.0] },
             );
-            let coarse_len = if subsample > 0.0 { 32 * u64::from(coarse_w) * u64::from(coarse_h) } else { 32 };
             let coarse = ctx.buffer("wedges::coarse", coarse_len, wgpu::BufferUsages::STORAGE);
-            let list_len = if subsample > 0.0 { 16 + 4 * u64::from(ctx.size.0) * u64::from(ctx.size.1) } else { 32 };
             let list = ctx.buffer("wedges::pixel_list", list_len, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST);
             // The dispatch's counts, copied out of the list (a buffer bound read-write may not also be a dispatch's argument).
             let args = ctx.buffer("wedges::fallback_groups", 16, wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST);
