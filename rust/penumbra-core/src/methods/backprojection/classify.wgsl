@@ -17,7 +17,8 @@ struct PixelList {
     pixels: array<u32>,
 };
 
-@group(0) @binding(6) var discontinuities: texture_2d<f32>;
+// 5.2's discontinuity marks, a bit a pixel (discontinuity.wgsl).
+@group(0) @binding(6) var<storage, read> lines: array<u32>;
 // -1 where the penumbra pixel is skipped (5.2).
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var class_out: texture_storage_2d<r32float, write>;
@@ -28,6 +29,16 @@ struct PixelList {
 // The object map and each mesh's object (passes/object_map.rs).
 @group(0) @binding(13) var object_map: texture_2d_array<u32>;
 @group(0) @binding(14) var<storage, read> mesh_objects: array<u32>;
+// The widened marks, written where `WRITE_LINES` is set (intermediates).
+@group(0) @binding(15) var lines_out: texture_storage_2d<r32float, write>;
+
+// Bit 3 of `bp.flags`: write `lines_out`.
+const WRITE_LINES: u32 = 8u;
+// 5.2: a pixel within this many pixels of a discontinuity mark, along x and
+// y (a square window), is never left to the pull-push: twice the 4x4
+// pattern's spacing, as the pull-push's second level reads 4x4 blocks
+// bilinearly.
+const LINE_RADIUS: i32 = 8;
 
 // Pixel classes (the `backprojection_class` image).
 const BACKGROUND: f32 = 0.0;
@@ -266,6 +277,28 @@ fn classify(r: BpReceiver) -> Classified {
     return out;
 }
 
+// 5.2: whether a discontinuity mark lies in the window of LINE_RADIUS about
+// px (clipped to the image): at most 2 words a row, as the window's 17
+// pixels span at most two 32-pixel words.
+fn near_discontinuity(px: vec2<i32>) -> bool {
+    let size = vec2<i32>(textureDimensions(gbuffer_normal));
+    let words = (size.x + 31) / 32;
+    let lo = max(px - LINE_RADIUS, vec2<i32>(0));
+    let hi = min(px + LINE_RADIUS, size - 1);
+    for (var w = lo.x / 32; w <= hi.x / 32; w++) {
+        // The window's bits of word w: from a to b (both in [0, 31]).
+        let a = u32(max(lo.x - 32 * w, 0));
+        let b = u32(min(hi.x - 32 * w, 31));
+        let mask = (0xffffffffu >> (31u - b)) & (0xffffffffu << a);
+        for (var y = lo.y; y <= hi.y; y++) {
+            if ((lines[y * words + w] & mask) != 0u) {
+                return true;
+            }
+        }
+    }
+    return false;
+}
+
 // 5.2: whether the visibility pass computes this penumbra pixel; if so it
 // joins the list, else it is left to the pull-push reconstruction.
 fn select_pixel(r: BpReceiver, c_in: Classified, px: vec2<i32>, p: vec3<f32>, n: vec3<f32>) -> Classified {
@@ -284,7 +317,7 @@ fn select_pixel(r: BpReceiver, c_in: Classified, px: vec2<i32>, p: vec3<f32>, n:
         let rank = f32(dither[(u32(px.y) % 4u) * 4u + u32(px.x) % 4u]);
         let ratio = bp.s_min / max(s_scr, 1e-30);
         selected = rank == 0.0 || rank < 16.0 * ratio * ratio;
-        if (!selected && textureLoad(discontinuities, px, 0).r > 0.5) {
+        if (!selected && near_discontinuity(px)) {
             selected = true;
             on_discontinuity = true;
         }
@@ -353,4 +386,7 @@ fn shade(pixel: ScreenPixel) {
     textureStore(class_out, px, vec4<f32>(c.kind, 0.0, 0.0, 0.0));
     textureStore(kernel_out, px, vec4<f32>(c.h0, 0.0, 0.0, 0.0));
     textureStore(level_out, px, vec4<f32>(c.level, 0.0, 0.0, 0.0));
+    if ((bp.flags & WRITE_LINES) != 0u) {
+        textureStore(lines_out, px, vec4<f32>(select(0.0, 1.0, near_discontinuity(px)), 0.0, 0.0, 0.0));
+    }
 }

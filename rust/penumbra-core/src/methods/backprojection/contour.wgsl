@@ -27,7 +27,8 @@ struct Backprojection {
     // Camera eye xyz; w: eta of Eq. 5, pixels per world unit at unit view depth.
     eye: vec4<f32>,
     // Bit 0: light-space multi-resolution (5.1); bit 1: screen-space (5.2);
-    // bit 2: coarse contours' crossings refined on level 0.
+    // bit 2: coarse contours' crossings refined on level 0; bit 3: write the
+    // widened discontinuity marks (classify.wgsl, intermediates only).
     flags: u32,
     // Levels of the hierarchy, level 0 (the map) included.
     levels: u32,

@@ -1,29 +1,21 @@
 #import shaders/receiver.wgsl
 #import shaders/per_pixel.wgsl
 
-// Method `backprojection`, 5.2: the screen-space discontinuity buffer. Step
-// 0 marks pixels at a discontinuity of the receivers: another mesh or the
+// Method `backprojection`, 5.2: the screen-space discontinuity buffer. It
+// marks pixels at a discontinuity of the receivers: another mesh or the
 // background among the 8 neighbours, a normal turning by more than
 // NORMAL_ANGLE, or a jump in depth. The paper uses a thresholded Sobel
 // filter on depth and normals; the depth test here is on the second
 // difference of 1 / depth, which is zero across any plane (1 / view depth is
 // affine in screen coordinates over a plane), so that planes seen at grazing
-// angles, whose depth gradient is steep, are not discontinuities. Steps 1
-// and 2 widen the lines by `radius` pixels along x, then y (a separable
-// maximum), beyond the pixel spacing of the sparse selection, so that the
-// pull-push reconstruction never fills a pixel from across a discontinuity.
+// angles, whose depth gradient is steep, are not discontinuities. The marks
+// are bits, 32 pixels of a row to a word (`lines`, cleared before the
+// pass): the classification widens them only where it asks, at the
+// penumbra pixels the dither skips (`near_discontinuity` in classify.wgsl),
+// instead of two passes of a separable maximum over every pixel (issue 30:
+// those were 60% of the classification's time at 1920x1080).
 
-struct DiscontinuityStep {
-    // 0: detect; 1: widen along x; 2: along y.
-    mode: u32,
-    radius: i32,
-    pad0: u32,
-    pad1: u32,
-};
-
-@group(0) @binding(2) var source: texture_2d<f32>;
-@group(0) @binding(3) var<storage, read> step: DiscontinuityStep;
-@group(0) @binding(4) var lines_out: texture_storage_2d<r32float, write>;
+@group(0) @binding(2) var<storage, read_write> lines: array<atomic<u32>>;
 
 // cos 30 degrees.
 const NORMAL_COS: f32 = 0.866;
@@ -58,18 +50,9 @@ fn detect(pixel: ScreenPixel) -> bool {
 
 // Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
 fn shade(pixel: ScreenPixel) {
-    let px = pixel.px;
-    var line = 0.0;
-    let s = step;
-    if (s.mode == 0u) {
-        if (pixel.geometry && detect(pixel)) {
-            line = 1.0;
-        }
-    } else {
-        let dir = select(vec2<i32>(0, 1), vec2<i32>(1, 0), s.mode == 1u);
-        for (var k = -s.radius; k <= s.radius; k++) {
-            line = max(line, textureLoad(source, texel(px + k * dir), 0).r);
-        }
+    if (pixel.geometry && detect(pixel)) {
+        let px = vec2<u32>(pixel.px);
+        let words = (textureDimensions(gbuffer_normal).x + 31u) / 32u;
+        atomicOr(&lines[px.y * words + px.x / 32u], 1u << (px.x % 32u));
     }
-    textureStore(lines_out, px, vec4<f32>(line, 0.0, 0.0, 0.0));
 }

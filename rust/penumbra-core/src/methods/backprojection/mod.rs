@@ -54,10 +54,6 @@ pub const MAX_KERNEL_FACTOR: f32 = 4.0;
 /// With 5.1 off, kernels wider than this many level-0 texels still go up
 /// levels, so that no pixel runs away with the GPU (`capped_kernels`).
 pub const MAX_LEVEL0_KERNEL: f32 = 256.0;
-/// 5.2: discontinuity lines are widened by this many pixels each side
-/// (twice the 4x4 pattern's spacing: the pull-push's second level reads
-/// 4x4 blocks bilinearly).
-pub const DISCONTINUITY_RADIUS: i32 = 8;
 /// Hierarchy levels the uniform block describes (map sides up to 2^15).
 const MAX_LEVELS: usize = 16;
 
@@ -112,15 +108,6 @@ crate::gpu_type! {
         pub(crate) layers: u32,
         pub(crate) active_layers: u32,
         pub(crate) far: f32,
-    }
-}
-
-crate::gpu_type! {
-    pub struct DiscontinuityUniform => "DiscontinuityStep" in "methods/backprojection/discontinuity.wgsl" {
-        pub(crate) mode: u32,
-        pub(crate) radius: i32,
-        pub(crate) pad0: u32,
-        pub(crate) pad1: u32,
     }
 }
 
@@ -301,14 +288,17 @@ impl Method for SoftShadowBackprojection {
         );
         let hierarchy = layout::compute_pipeline_entry(device, "backprojection::hierarchy_pipeline", &module, &hierarchy_layout, "main");
         let storage = layout::visibility_storage;
-        let bindings = [layout::float_texture, layout::parameters, storage];
+        let bindings = [layout::storage_buffer_rw as crate::passes::screen::LayoutEntry];
         let discontinuity = ScreenPass::per_pixel(device, pool, "backprojection::discontinuity_pass", crate::shader!("discontinuity.wgsl"), &bindings);
         // Reads the map, the hierarchy, two parameter blocks and the
-        // discontinuities; writes visibility, class, kernel, level, the pixel list and the counters.
-        let bindings = object_map::with_bindings(&[
-            layout::depth_array, layout::storage_buffer, layout::parameters, layout::parameters, layout::float_texture,
+        // discontinuity marks; writes visibility, class, kernel, level, the
+        // pixel list and the counters; after the object map, the widened
+        // marks (intermediates).
+        let mut bindings = object_map::with_bindings(&[
+            layout::depth_array, layout::storage_buffer, layout::parameters, layout::parameters, layout::storage_buffer,
             storage, storage, storage, storage, layout::storage_buffer_rw, layout::storage_buffer_rw,
         ]);
+        bindings.push(storage);
         let classify = ScreenPass::per_pixel(device, pool, "backprojection::classify_pass", crate::shader!("classify.wgsl"), &bindings);
         // Reads the map, the hierarchy, two parameter blocks, the kernel and
         // level images and the pixel list; writes visibility and the counters.
@@ -354,12 +344,25 @@ impl Method for SoftShadowBackprojection {
         })?;
 
         let objects = object_map::record_if(frame, frame.ctx.light.radius > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
-        let uniform = self.uniform(&frame.ctx, params, &hierarchy.layout)?;
+        // The widened discontinuity marks as an image: for intermediates only.
+        let write_lines = params.screen_adaptive && frame.wants_intermediates();
+        let uniform = self.uniform(&frame.ctx, params, &hierarchy.layout, write_lines)?;
         let raw = frame.ctx.screen_texture("backprojection::visibility_sparse");
         let classes = frame.ctx.screen_texture("backprojection::class");
         let kernel = frame.ctx.screen_texture("backprojection::kernel");
         let level = frame.ctx.screen_texture("backprojection::level");
-        let lines = params.screen_adaptive.then(|| frame.ctx.screen_texture("backprojection::discontinuities"));
+        let lines_image = if write_lines {
+            frame.ctx.screen_texture("backprojection::discontinuities")
+        } else {
+            // Not written; the binding still needs an image.
+            let usage = wgpu::TextureUsages::STORAGE_BINDING;
+            frame.ctx.texture("backprojection::no_discontinuities", (1, 1), formats::VISIBILITY, usage)
+        };
+        // 5.2's marks, a bit a pixel, rows of whole 32-bit words (a word
+        // where 5.2 is off: not read then).
+        let line_bytes = if params.screen_adaptive { 4 * u64::from(w.div_ceil(32)) * u64::from(h) } else { 4 };
+        frame.ctx.check_buffer("backprojection", "the discontinuity marks", line_bytes, "the image size")?;
+        let lines = frame.ctx.buffer("backprojection::discontinuity_marks", line_bytes, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
         let list = frame.ctx.buffer(
             "backprojection::pixel_list",
             list_bytes,
@@ -374,25 +377,18 @@ impl Method for SoftShadowBackprojection {
             );
             let bp = ctx.parameters("backprojection::uniforms", &uniform);
             let mut first = true;
-            let unused;
-            let lines = match &lines {
-                Some(lines) => {
-                    self.record_discontinuities(ctx, encoder, lines, ts.and_then(|t| t.compute_part(true, false)));
-                    first = false;
-                    lines
-                }
-                None => {
-                    // Not read without 5.2; the binding still needs an image.
-                    unused = ctx.texture("backprojection::no_discontinuities", (1, 1), formats::VISIBILITY, wgpu::TextureUsages::TEXTURE_BINDING);
-                    &unused
-                }
-            };
+            if params.screen_adaptive {
+                encoder.clear_buffer(&lines, 0, None);
+                let bind_group = self.discontinuity.bind_group(ctx, &[Binding::Buffer(&lines)]);
+                self.discontinuity.dispatch(ctx, encoder, "main", &bind_group, ts.and_then(|t| t.compute_part(true, false)));
+                first = false;
+            }
             let resources = [
                 Binding::Texture(&map),
                 Binding::Buffer(&hierarchy.buffer),
                 Binding::Buffer(&test),
                 Binding::Buffer(&bp),
-                Binding::Texture(lines),
+                Binding::Buffer(&lines),
                 Binding::Texture(&raw),
                 Binding::Texture(&classes),
                 Binding::Texture(&kernel),
@@ -400,7 +396,9 @@ impl Method for SoftShadowBackprojection {
                 Binding::Buffer(&list),
                 Binding::Buffer(&counters),
             ];
-            let bind_group = self.classify.bind_group(ctx, &objects.after(&resources));
+            let mut resources = objects.after(&resources);
+            resources.push(Binding::Texture(&lines_image));
+            let bind_group = self.classify.bind_group(ctx, &resources);
             self.classify.dispatch(ctx, encoder, "main", &bind_group, ts.and_then(|t| t.compute_part(first, true)));
             (counters, test, bp)
         })?;
@@ -434,15 +432,15 @@ impl Method for SoftShadowBackprojection {
         frame.intermediate(Intermediate::color("backprojection_kernel", &kernel, 1))?;
         frame.intermediate(Intermediate::color("backprojection_level", &level, 1))?;
         frame.intermediate(Intermediate::color("backprojection_visibility_sparse", &raw, 1))?;
-        if let Some(lines) = &lines {
-            frame.intermediate(Intermediate::color("backprojection_discontinuities", lines, 1))?;
+        if write_lines {
+            frame.intermediate(Intermediate::color("backprojection_discontinuities", &lines_image, 1))?;
         }
         Ok(MethodOutput { visibility })
     }
 }
 
 impl SoftShadowBackprojection {
-    fn uniform(&self, ctx: &FrameContext<'_>, params: &BackprojectionParams, layout: &HierarchyLayout) -> Result<BackprojectionUniform> {
+    fn uniform(&self, ctx: &FrameContext<'_>, params: &BackprojectionParams, layout: &HierarchyLayout, write_lines: bool) -> Result<BackprojectionUniform> {
         let camera = ctx.camera;
         // Eq. 5's eta: pixels per world unit at unit view depth. fov_y is in (0, 180) (camera validation).
         let eta = camera.height as f32 / (2.0 * (0.5 * camera.fov_y_degrees.to_radians()).tan());
@@ -466,7 +464,10 @@ impl SoftShadowBackprojection {
             beta: params.beta,
             s_min: params.s_min,
             eye: [camera.eye[0], camera.eye[1], camera.eye[2], eta],
-            flags: u32::from(params.light_adaptive) | (u32::from(params.screen_adaptive) << 1) | (u32::from(params.refined_contour) << 2),
+            flags: u32::from(params.light_adaptive)
+                | (u32::from(params.screen_adaptive) << 1)
+                | (u32::from(params.refined_contour) << 2)
+                | (u32::from(write_lines) << 3),
             levels,
             max_kernel,
             descent: params.descent,
@@ -515,28 +516,6 @@ impl SoftShadowBackprojection {
         }
     }
 
-    /// 5.2's discontinuity buffer: detection, then widening along x and y.
-    fn record_discontinuities(
-        &self,
-        ctx: &FrameContext<'_>,
-        encoder: &mut wgpu::CommandEncoder,
-        lines: &PooledTexture,
-        first: Option<wgpu::ComputePassTimestampWrites<'_>>,
-    ) {
-        let detected = ctx.screen_texture("backprojection::discontinuities_detected");
-        let widened = ctx.screen_texture("backprojection::discontinuities_widened");
-        // (source, target): detection reads no source (it binds the final image, not yet written).
-        let steps = [(lines, &detected), (&detected, &widened), (&widened, lines)];
-        let mut first = first;
-        for (mode, (source, target)) in steps.into_iter().enumerate() {
-            let uniform = DiscontinuityUniform { mode: mode as u32, radius: DISCONTINUITY_RADIUS, pad0: 0, pad1: 0 };
-            let uniform = ctx.parameters("backprojection::discontinuity_step", &uniform);
-            let resources = [Binding::Texture(source), Binding::Buffer(&uniform), Binding::Texture(target)];
-            let bind_group = self.discontinuity.bind_group(ctx, &resources);
-            self.discontinuity.dispatch(ctx, encoder, "main", &bind_group, first.take());
-        }
-    }
-
     /// 5.2's pull-push reconstruction into `visibility`.
     #[allow(clippy::too_many_arguments)]
     fn record_pull_push(
@@ -553,26 +532,32 @@ impl SoftShadowBackprojection {
             let (w, h) = *sizes.last().unwrap();
             sizes.push((w.div_ceil(2), h.div_ceil(2)));
         }
-        let mut offsets = Vec::with_capacity(sizes.len());
+        // Levels 1 and up in `pyramid` (level 0 is the image itself).
+        let mut offsets = vec![0u32; sizes.len()];
         let mut total = 0u64;
-        for &(w, h) in &sizes {
-            offsets.push(total as u32);
+        for (l, &(w, h)) in sizes.iter().enumerate().skip(1) {
+            offsets[l] = total as u32;
             total += w as u64 * h as u64;
         }
-        let pyramid = ctx.buffer("backprojection::pyramid", 8 * total, wgpu::BufferUsages::STORAGE);
-        // (mode, level, other level)
-        let mut steps = vec![(0u32, 0usize, 0usize)];
-        steps.extend((1..sizes.len()).map(|l| (1, l, l - 1)));
-        steps.extend((0..sizes.len() - 1).rev().map(|l| (2, l, l + 1)));
-        steps.push((3, 0, 0));
+        let pyramid = ctx.buffer("backprojection::pyramid", 8 * total.max(1), wgpu::BufferUsages::STORAGE);
+        let top = sizes.len() - 1;
+        // (mode, level, other level): level 1 pulled from the image, the
+        // levels above it each from the one below, pushed down to level 1,
+        // and the image resolved from level 1.
+        let mut steps = Vec::with_capacity(2 * sizes.len());
+        steps.extend((1..sizes.len()).map(|l| (if l == 1 { 0u32 } else { 1 }, l, l - 1)));
+        steps.extend((1..top).rev().map(|l| (2, l, l + 1)));
+        steps.push((3, 0, top.min(1)));
         let count = steps.len();
         for (k, (mode, l, o)) in steps.into_iter().enumerate() {
+            // A 1 x 1 image has no level 1: the resolve reads none (other_width 0).
+            let other_width = if o == 0 && mode == 3 { 0 } else { sizes[o].0 };
             let uniform = PullPushUniform {
                 mode,
                 width: sizes[l].0,
                 height: sizes[l].1,
                 offset: offsets[l],
-                other_width: sizes[o].0,
+                other_width,
                 other_height: sizes[o].1,
                 other_offset: offsets[o],
                 pad: 0,
