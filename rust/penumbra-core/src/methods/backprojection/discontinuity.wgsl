@@ -12,8 +12,8 @@
 // are bits, 32 pixels of a row to a word (`lines`, cleared before the
 // pass): the classification widens them only where it asks, at the
 // penumbra pixels the dither skips (`near_discontinuity` in classify.wgsl),
-// instead of two passes of a separable maximum over every pixel (issue 30:
-// those were 60% of the classification's time at 1920x1080).
+// instead of two passes of a separable maximum over every pixel (issue 30,
+// docs/methods/backprojection.md).
 
 @group(0) @binding(2) var<storage, read_write> lines: array<atomic<u32>>;
 
@@ -30,29 +30,44 @@ fn inverse_depth(px: vec2<i32>) -> f32 {
     return 1.0 / max(textureLoad(gbuffer_position, texel(px), 0).w, 1e-30);
 }
 
-fn detect(pixel: ScreenPixel) -> bool {
-    let px = pixel.px;
-    for (var k = 0; k < 9; k++) {
-        let o = vec2<i32>(k % 3 - 1, k / 3 - 1);
-        let q = textureLoad(gbuffer_normal, texel(px + o), 0);
-        if (q.w != pixel.normal_texel.w) {
-            return true;
-        }
-        if (dot(q.xyz, pixel.n) < NORMAL_COS) {
-            return true;
-        }
-    }
-    let centre = inverse_depth(px);
-    let dx = inverse_depth(px - vec2<i32>(1, 0)) - 2.0 * centre + inverse_depth(px + vec2<i32>(1, 0));
-    let dy = inverse_depth(px - vec2<i32>(0, 1)) - 2.0 * centre + inverse_depth(px + vec2<i32>(0, 1));
-    return max(abs(dx), abs(dy)) > DEPTH_CURVATURE * centre;
+fn mark(px: vec2<i32>) {
+    let p = vec2<u32>(px);
+    let words = (textureDimensions(gbuffer_normal).x + 31u) / 32u;
+    atomicOr(&lines[p.y * words + p.x / 32u], 1u << (p.x % 32u));
 }
 
-// Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
+// A pixel is marked where another mesh or the background, or a normal
+// turned by more than NORMAL_ANGLE, lies among its 8 neighbours: a relation
+// between two pixels that holds both ways, so each pair is tested once, by
+// the pixel before the other in reading order (its 4 neighbours after it),
+// which marks whichever of the two has geometry (4 reads of the normals a
+// pixel, not 9). A pixel whose own normal is degenerate is marked too, as
+// the test against itself did.
 fn shade(pixel: ScreenPixel) {
-    if (pixel.geometry && detect(pixel)) {
-        let px = vec2<u32>(pixel.px);
-        let words = (textureDimensions(gbuffer_normal).x + 31u) / 32u;
-        atomicOr(&lines[px.y * words + px.x / 32u], 1u << (px.x % 32u));
+    let px = pixel.px;
+    let size = vec2<i32>(textureDimensions(gbuffer_normal));
+    var own = false;
+    if (pixel.geometry) {
+        own = dot(pixel.n, pixel.n) < NORMAL_COS;
+        let centre = inverse_depth(px);
+        let dx = inverse_depth(px - vec2<i32>(1, 0)) - 2.0 * centre + inverse_depth(px + vec2<i32>(1, 0));
+        let dy = inverse_depth(px - vec2<i32>(0, 1)) - 2.0 * centre + inverse_depth(px + vec2<i32>(0, 1));
+        own = own || max(abs(dx), abs(dy)) > DEPTH_CURVATURE * centre;
+    }
+    for (var k = 0; k < 4; k++) {
+        let q = px + select(vec2<i32>(k - 2, 1), vec2<i32>(1, 0), k == 0);
+        if (any(q < vec2<i32>(0)) || any(q >= size)) {
+            continue;
+        }
+        let t = textureLoad(gbuffer_normal, q, 0);
+        if (t.w != pixel.normal_texel.w || dot(t.xyz, pixel.n) < NORMAL_COS) {
+            own = own || pixel.geometry;
+            if (!is_background(t)) {
+                mark(q);
+            }
+        }
+    }
+    if (own) {
+        mark(px);
     }
 }
