@@ -65,6 +65,18 @@ def test_the_repository_config_loads_full_and_quick() -> None:
     assert set(full.methods) == set(penumbra.methods()) - {"reference", "adaptive"}, "every method but the peer (and adaptive, too slow for the full run) is benchmarked"
 
 
+def test_a_visibility_only_config_times_renders_without_shading(tmp_path: Path) -> None:
+    from penumbra.bench.runner import render_outputs
+
+    path = tmp_path / "c.toml"
+    path.write_text("scenes = ['sphere_on_plane']\nradiance = false\n")
+    assert render_outputs(bench.load_config(path)) == ["visibility", "object_id"]
+    assert "radiance" in render_outputs(bench.load_config(path, overrides=["radiance=true"]))
+    # A config's own columns may read any image.
+    columns = bench.load_config(path, overrides=["columns=['penumbra.metrics:compare']"])
+    assert {"radiance", "position", "normal"} <= set(render_outputs(columns))
+
+
 def test_set_replaces_top_level_keys(tmp_path: Path) -> None:
     path = tmp_path / "c.toml"
     path.write_text("scenes = ['sphere_on_plane']\nsize = 64\n[large]\nscenes = ['sphere_on_plane']\nwidth = 8\nheight = 8\n")
@@ -216,6 +228,8 @@ def test_quick_run_writes_every_output_and_its_numbers_hold(renderer: object, tm
     assert len(hard) == 1 and float(hard[0]["time_over_hard"]) == 1.0
     # The row schema sweeps share (penumbra.grid.result_columns): ms_<pass>, stat_<name>, reused.
     assert float(hard[0]["ms_gbuffer"]) > 0 and float(hard[0]["stat_map_size"]) > 0 and hard[0]["reused"] == ""
+    # radiance = false: the question is visibility, and the timed renders do not shade.
+    assert not cfg.radiance and not hard[0].get("ms_shading"), hard[0].get("ms_shading")
     assert not any(k.startswith("time_") and k not in ("time_over_hard", "time_over_mitsuba") for k in rows[0])
     # Every method row is set against the scene's Mitsuba curve at its own error.
     for r in rows:

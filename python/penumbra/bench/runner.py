@@ -36,8 +36,19 @@ __all__ = ["run", "write_reports", "run_scaling", "make_renderer", "machine_desc
 OUTPUTS = ["radiance", "visibility", "object_id"]
 
 
+def render_outputs(cfg: BenchConfig) -> list[str]:
+    """The images a timed render reads back. With ``radiance = false`` the
+    question is visibility alone, as Mitsuba's peer rows answer it: no
+    radiance, so no shading pass and no radiance readback in the time (until
+    issue 30 every render shaded, 43 of `hard`'s 174 ms at 1920x1080). A
+    config's own ``columns`` may read anything: they get every image."""
+    if cfg.columns:
+        return OUTPUTS + ["position", "normal"]
+    return OUTPUTS if cfg.radiance else ["visibility", "object_id"]
+
+
 def _median_render(renderer: Renderer, scene: Scene, method: str, params: dict[str, Any], cfg: BenchConfig) -> tuple[RenderResult, dict[str, float], int]:
-    outputs = OUTPUTS + ["position", "normal"] if cfg.columns else OUTPUTS  # a config's own columns may read them
+    outputs = render_outputs(cfg)
     for _ in range(cfg.warmup):
         renderer.render(scene, method, outputs=outputs, **params)
     results = []
