@@ -74,7 +74,7 @@ def test_late_parameter_reuses_earlier_passes(cached: penumbra.Renderer) -> None
     # pvm falloff: only the visibility pass and shading run.
     cached.render(s, "pvm", map_size=MAP, falloff=True)
     pvm = cached.render(s, "pvm", map_size=MAP, falloff=False)
-    assert pvm.reused_passes == ["gbuffer", "object_map", "penumbra_volumes", "shadow_map"]
+    assert pvm.reused_passes == ["gbuffer", "object_map", "penumbra_volumes", "shadow_map", "solid_layers"]
     assert list(pvm.timings) == ["visibility", "shading", "readback"]
     # A light radius change keeps the G-buffer only: the light's maps cover
     # the casters and the penumbrae the radius sizes (issue 30).

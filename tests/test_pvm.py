@@ -444,7 +444,7 @@ def test_stats_intermediates_and_caches(renderer: penumbra.Renderer) -> None:
     # The same render again reuses every pass before visibility from the pass
     # cache; another map size rebuilds the volumes from cached silhouettes.
     again = renderer.render(scene, "pvm", map_size=512)
-    assert again.reused_passes == ["gbuffer", "object_map", "penumbra_volumes", "shadow_map"]
+    assert again.reused_passes == ["gbuffer", "object_map", "penumbra_volumes", "shadow_map", "solid_layers"]
     resized = renderer.render(scene, "pvm", map_size=256)
     assert resized.reused_passes == ["gbuffer"]
     for key in ("pvm_volume_depth", "pvm_edge0", "pvm_edge1", "pvm_in_volume", "shadow_map"):
@@ -455,7 +455,7 @@ def test_stats_intermediates_and_caches(renderer: penumbra.Renderer) -> None:
     # One topology and one silhouette per scene (connectivity spans its meshes).
     assert resized.stats["silhouette_cache_hits"] == 1
     np.testing.assert_array_equal(first.visibility, again.visibility)
-    assert list(first.timings) == ["gbuffer", "shadow_map", "penumbra_volumes", "far_volumes", "object_map", "visibility", "shading", "readback"]
+    assert list(first.timings) == ["gbuffer", "shadow_map", "penumbra_volumes", "far_volumes", "object_map", "solid_layers", "visibility", "shading", "readback"]
     moved = scene.with_light(penumbra.SphereLight(scene.light.center + 0.1, scene.light.radius, intensity=scene.light.intensity))
     assert renderer.render(moved, "pvm").stats["silhouette_cache_hits"] == 0
 

@@ -11,7 +11,10 @@ pub const SAMPLES_DEFAULT: i64 = 16;
 /// `map_march`'s default: 8 light depths (4 and 16 did worse: docs/methods/pvm.md).
 pub const MARCH_DEFAULT: i64 = 8;
 
-/// `map_samples`, `map_bound` and `map_march`.
+/// `map_solids`' default.
+pub const SOLIDS_DEFAULT: bool = true;
+
+/// `map_samples`, `map_bound`, `map_march` and `map_solids`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct MapBound {
     /// Points of the light's disk whose rays are followed (0: no bound).
@@ -23,13 +26,16 @@ pub struct MapBound {
     /// Light depths at which a ray the map's search leaves seen is sampled
     /// again (`ray_marched_hidden`; 0: the search alone).
     pub march: u32,
+    /// `map_solids`: rays passing inside a solid caster behind the map's
+    /// surface are hidden (passes/solid_layers.rs).
+    pub solids: bool,
 }
 
 impl MapBound {
     /// The three parameters; `samples` is the method's default number of
     /// points, `samples_doc` says what the bound bounds and what 0 leaves
     /// (the method's own visibility).
-    pub fn specs(samples: i64, samples_doc: &'static str) -> [ParamSpec; 3] {
+    pub fn specs(samples: i64, samples_doc: &'static str) -> [ParamSpec; 4] {
         [
             ParamSpec::int("map_samples", samples, 0, 256, samples_doc),
             // Where the map sees the light's centre, an edge model may hide
@@ -55,6 +61,15 @@ impl MapBound {
                 64,
                 "with map_samples > 0: a ray the shadow map's surface-to-surface search leaves seen is sampled again at this many light depths, from the pixel to the map's near plane, and hidden where a sample lies just behind the map's surface; 0: the search alone",
             ),
+            // The map holds the first surface alone: a ray behind it through
+            // a body it cannot see (a boot under a floating cube; the floor
+            // at a resting mesh's contact) was taken for seen, and the umbra
+            // lit (docs/methods/wedges.md).
+            ParamSpec::bool(
+                "map_solids",
+                SOLIDS_DEFAULT,
+                "with map_samples > 0: the rays are also hidden where they pass inside a closed caster that does not hold the light, as the first four of such casters' surfaces along the light centre's rays show (one more raster pass from the light)",
+            ),
         ]
     }
 
@@ -64,6 +79,7 @@ impl MapBound {
             samples: p.int("map_samples").clamp(0, 256) as u32,
             both: p.choice("map_bound") == "both",
             march: p.int("map_march").clamp(0, 64) as u32,
+            solids: p.bool("map_solids"),
         }
     }
 

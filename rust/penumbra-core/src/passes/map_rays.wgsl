@@ -71,10 +71,79 @@ fn ray_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, depth: f
         if (abs(m - d) <= 2.0 * light_texel_size(t.light_space, d)) {
             return true;
         }
+        // Behind the map's surface (m < d): inside a solid the map cannot see.
+        if (solid_stretch(t, p + s * (goal - p), d, d) >= 0.0) {
+            return true;
+        }
         d = m;
     }
     return false;
 }
+
+// map_solids (beyond the papers, issue 28): the solid layers
+// (passes/solid_layers.rs) under the point q of a ray, the ray's light
+// depths [z0, z1] around it: the middle of the first part of [z0, z1]
+// that lies inside a solid caster there (between the 1st and 2nd, or the
+// 3rd and 4th, solid surface along the centre's ray through q's texel of
+// the layers, each end drawn in by 2 of the layers' texels: a surface
+// slanting across a texel is held at its centre's depth, and a thinner
+// stretch counts for nothing), or -1 where none does. The importing shader
+// binds the layers as `solid_layers` (array<u32>); their side 0 (no solid,
+// or map_solids off) answers -1.
+fn solid_stretch(t: ShadowTest, q: vec3<f32>, z0: f32, z1: f32) -> f32 {
+    let side = solid_layers[0];
+    if (side == 0u) {
+        return -1.0;
+    }
+    let m = light_map_point(t.light_space, q);
+    if (!layer_active(t.light_space, m.layer)) {
+        return -1.0;
+    }
+    let c = map_texel(vec2<u32>(side), map_point_in(t.light_space, m, vec2<u32>(side)));
+    let base = SOLID_HEADER + ((u32(m.layer) * side + u32(c.y)) * side + u32(c.x)) * SOLID_LAYERS;
+    // depth.z is the map's side in texels (> 0); side > 0 here.
+    let margin = 2.0 * light_texel_size(t.light_space, z1) * (t.light_space.depth.z / f32(side));
+    for (var i = 0u; i < SOLID_LAYERS; i += 2u) {
+        let exit = solid_layers[base + i + 1u];
+        // Fewer surfaces than a stretch needs: none further (0 is empty).
+        if (exit == 0u) {
+            return -1.0;
+        }
+        let a = max(z0, bitcast<f32>(~solid_layers[base + i]) + margin);
+        let b = min(z1, bitcast<f32>(~exit) - margin);
+        if (a <= b) {
+            return 0.5 * (a + b);
+        }
+    }
+    return -1.0;
+}
+
+// Whether the ray from p (light depth `depth`) to the light point `goal`
+// (light depth `d_goal`) passes inside a solid caster between its light
+// depths z0 <= z1, as the layers under its point at depth `z` show: where
+// they put a solid within [z0, z1] there, the ray's own point at that
+// solid's depth must lie inside it too (the ray moves across texels between
+// z0 and z1: the first look finds a solid thinner than the step, the second
+// keeps a ray that passes beside it).
+fn ray_in_solid(t: ShadowTest, p: vec3<f32>, depth: f32, goal: vec3<f32>, d_goal: f32, z: f32, z0: f32, z1: f32) -> bool {
+    let inside = solid_stretch(t, ray_point(p, depth, goal, d_goal, z), z0, z1);
+    if (inside < 0.0) {
+        return false;
+    }
+    return solid_stretch(t, ray_point(p, depth, goal, d_goal, inside), inside, inside) >= 0.0;
+}
+
+// The point of the ray from p (light depth `depth`) to `goal` (`d_goal`)
+// at light depth z: light depth is affine along the ray (nearly so in a
+// cube face), and depth - d_goal > 0 (no surface touches the light).
+fn ray_point(p: vec3<f32>, depth: f32, goal: vec3<f32>, d_goal: f32, z: f32) -> vec3<f32> {
+    let s = clamp((depth - z) / max(depth - d_goal, 1e-30), 0.0, 1.0);
+    return p + s * (goal - p);
+}
+
+// passes/solid_layers.rs' HEADER and LAYERS.
+const SOLID_HEADER: u32 = 4u;
+const SOLID_LAYERS: u32 = 4u;
 
 // map_march = k (beyond the papers, issue 28): a second look at a ray that
 // `ray_hidden` leaves seen. Its search jumps from surface to surface as the
@@ -103,6 +172,9 @@ fn ray_marched_hidden(t: ShadowTest, map: texture_depth_2d_array, p: vec3<f32>, 
         let s = clamp((depth - z) / max(depth - d_goal, 1e-30), 0.0, 1.0);
         let m = map_depth(t, map, p + s * (goal - p));
         if (m <= z && z <= m + dz + 2.0 * light_texel_size(t.light_space, z)) {
+            return true;
+        }
+        if (m <= z && ray_in_solid(t, p, depth, goal, d_goal, z, z - 0.5 * dz, z + 0.5 * dz)) {
             return true;
         }
     }

@@ -10,6 +10,7 @@ pub mod screen;
 pub mod shading;
 pub mod shadow_map;
 pub mod shadow_test;
+pub mod solid_layers;
 pub mod volumes;
 
 /// Vertex layout of [`crate::scene::CornerVertex`]: position, normal, mesh index.

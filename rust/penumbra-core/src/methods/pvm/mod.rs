@@ -30,6 +30,7 @@ use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::object_map::{self, OBJECT_MAP};
+use crate::passes::solid_layers::{self, SolidLayersPass, SOLID_LAYERS};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shadow_test::ShadowMapSettings;
 use crate::passes::volumes::{Keep, VolumePass};
@@ -133,6 +134,7 @@ pub struct PenumbraVolumeMaps {
     volume_pass: VolumePass,
     far_volume_pass: VolumePass,
     object_pass: VolumePass,
+    solid_pass: SolidLayersPass,
     visibility: ScreenPass,
     edge_maps_pipeline: wgpu::ComputePipeline,
     edge_maps_layout: Layout,
@@ -252,7 +254,7 @@ impl Method for PenumbraVolumeMaps {
     type Params = PvmParams;
 
     fn cached_passes() -> &'static [CachedPass] {
-        &[CENTRE_MAP, PENUMBRA_VOLUMES, OBJECT_MAP]
+        &[CENTRE_MAP, PENUMBRA_VOLUMES, OBJECT_MAP, SOLID_LAYERS]
     }
 
     fn new(device: &wgpu::Device, pool: &ResourcePool) -> Self {
@@ -265,10 +267,12 @@ impl Method for PenumbraVolumeMaps {
         // Reads the map, the volume map's depth and edge indices, the edges and
         // the test block; writes visibility, membership and the counter; reads
         // the far edge indices.
-        let bindings = object_map::with_bindings(&[
+        let mut bindings = object_map::with_bindings(&[
             layout::depth_array, layout::depth_array, uint_array, layout::parameters, layout::parameters,
             layout::visibility_storage, layout::visibility_storage, layout::storage_buffer_rw, uint_array,
         ]);
+        // The solid layers (map_solids).
+        bindings.push(layout::storage_buffer);
         let visibility = ScreenPass::per_pixel(device, pool, "pvm::visibility_pass", crate::shader!("visibility.wgsl"), &bindings);
         let edge_maps_layout = pool.layout(
             device,
@@ -277,7 +281,8 @@ impl Method for PenumbraVolumeMaps {
         );
         let edge_maps_pipeline =
             layout::compute_pipeline(device, "pvm::edge_maps_pipeline", crate::shader!("edge_maps.wgsl"), &edge_maps_layout);
-        Self { volume_pass, far_volume_pass, object_pass: object_map::pass(device, pool), visibility, edge_maps_pipeline, edge_maps_layout }
+        let solid_pass = SolidLayersPass::new(device, pool);
+        Self { volume_pass, far_volume_pass, object_pass: object_map::pass(device, pool), solid_pass, visibility, edge_maps_pipeline, edge_maps_layout }
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &PvmParams) -> Result<MethodOutput> {
@@ -295,6 +300,7 @@ impl Method for PenumbraVolumeMaps {
             self.record_volumes(frame, params, &projection, volume_map).map(Arc::new)
         })?;
         let objects = object_map::record_if(frame, params.repairs.horizon && light.radius > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
+        let solids = solid_layers::record_if(frame, params.map.solids && params.map.samples > 0 && r > 0.0, &self.solid_pass, &projection, params.shadow.map_size)?;
         let visibility = frame.ctx.screen_texture("pvm::visibility");
         let membership = frame.ctx.screen_texture("pvm::in_volume");
         let counter = frame.pass("visibility", |ctx, encoder, ts| {
@@ -323,7 +329,9 @@ impl Method for PenumbraVolumeMaps {
                 // Without a far map the shader does not read it: the near one stands in.
                 Binding::Texture(volumes.far_edge_index.as_ref().unwrap_or(&volumes.edge_index)),
             ];
-            self.visibility.run(ctx, encoder, &objects.after(&resources), ts);
+            let mut resources = objects.after(&resources);
+            resources.push(Binding::Buffer(&solids.buffer));
+            self.visibility.run(ctx, encoder, &resources, ts);
             counter
         })?;
         let s = &volumes.stats;

@@ -36,6 +36,8 @@ struct EdgePoints {
 // The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
 @group(0) @binding(11) var object_map: texture_2d_array<u32>;
 @group(0) @binding(12) var<storage, read> mesh_objects: array<u32>;
+// map_solids: the solid layers the map rays read (passes/solid_layers.rs).
+@group(0) @binding(13) var<storage, read> solid_layers: array<u32>;
 
 // The cutting plane of an edge through a receiver (4.2): its unit normal n,
 // pointing away from the occluder, and the signed distance s of the light's

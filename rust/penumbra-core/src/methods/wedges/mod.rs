@@ -68,6 +68,7 @@ use crate::params::{MethodParams, ParamSet, ParamSpec};
 use crate::pass_cache::{CachedPass, PassKey};
 use crate::passes::centre_map::{self, CENTRE_MAP};
 use crate::passes::object_map::{self, OBJECT_MAP};
+use crate::passes::solid_layers::{self, SolidLayersPass, SOLID_LAYERS};
 use crate::passes::screen::ScreenPass;
 use crate::passes::shadow_test::ShadowMapSettings;
 use crate::passes::volumes::VolumePass;
@@ -196,6 +197,7 @@ pub struct PenumbraWedges {
     cull: ScreenPass,
     visibility: ScreenPass,
     object_pass: VolumePass,
+    solid_pass: SolidLayersPass,
 }
 
 impl MethodParams for WedgesParams {
@@ -291,7 +293,7 @@ impl Method for PenumbraWedges {
     type Params = WedgesParams;
 
     fn cached_passes() -> &'static [CachedPass] {
-        &[CENTRE_MAP, PENUMBRA_WEDGES, OBJECT_MAP]
+        &[CENTRE_MAP, PENUMBRA_WEDGES, OBJECT_MAP, SOLID_LAYERS]
     }
 
     fn new(device: &wgpu::Device, pool: &crate::gpu::pool::ResourcePool) -> Self {
@@ -306,11 +308,13 @@ impl Method for PenumbraWedges {
         // And subsample's coarse results and list of pixels to evaluate.
         bindings.push(layout::storage_buffer_rw);
         bindings.push(layout::storage_buffer_rw);
+        // The solid layers (map_solids).
+        bindings.push(layout::storage_buffer);
         let visibility = ScreenPass::new(device, pool, "wedges::visibility_pass", crate::shader!("visibility.wgsl"), &bindings, &["main", "coarse_main", "middle_main", "middle_fallback_main", "fallback_main"]);
         // Reads the bins, the support planes and the settings; writes the marks.
         let cull_bindings = [layout::storage_buffer, layout::storage_buffer, layout::storage_buffer, layout::parameters, layout::storage_buffer_rw, layout::storage_buffer_rw];
         let cull = ScreenPass::new(device, pool, "wedges::tile_cull", crate::shader!("tile_cull.wgsl"), &cull_bindings, &["main"]);
-        Self { cull, visibility, object_pass: object_map::pass(device, pool) }
+        Self { cull, visibility, object_pass: object_map::pass(device, pool), solid_pass: SolidLayersPass::new(device, pool) }
     }
 
     fn record(&self, frame: &mut Frame<'_>, params: &WedgesParams) -> Result<MethodOutput> {
@@ -329,6 +333,7 @@ impl Method for PenumbraWedges {
             Self::record_wedges(frame, params).map(Arc::new)
         })?;
         let objects = object_map::record_if(frame, params.repairs.horizon && light.radius > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
+        let solids = solid_layers::record_if(frame, params.map.solids && params.map.samples > 0 && light.radius > 0.0, &self.solid_pass, &projection, params.shadow.map_size)?;
         let visibility = frame.ctx.screen_texture("wedges::visibility");
         let hard = frame.ctx.screen_texture("wedges::hard");
         let intensity = frame.ctx.screen_texture("wedges::intensity");
@@ -392,6 +397,7 @@ impl Method for PenumbraWedges {
             resources.push(Binding::Buffer(&keep));
             resources.push(Binding::Buffer(&coarse));
             resources.push(Binding::Buffer(&list));
+            resources.push(Binding::Buffer(&solids.buffer));
             let group = self.visibility.bind_group(ctx, &resources);
             if subsample > 0.0 {
                 // The cascade (visibility.wgsl): the top grid (x, y multiples of 4) evaluated, the middle's

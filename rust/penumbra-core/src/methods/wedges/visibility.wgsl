@@ -74,6 +74,8 @@ struct PixelList {
     pixels: array<u32>,
 };
 @group(0) @binding(16) var<storage, read_write> list: PixelList;
+// map_solids: the solid layers the map rays read (passes/solid_layers.rs).
+@group(0) @binding(17) var<storage, read> solid_layers: array<u32>;
 
 // Eq. 1-2 along the side ray u: p's distances to the front plane (F <= 0
 // inside) and the back plane (B >= 0 inside), as fractions of the chord.
