@@ -126,15 +126,15 @@ pub fn record_if(frame: &mut Frame<'_>, needed: bool, pass: &SolidLayersPass, pr
     Ok(Arc::new(SolidLayers { buffer }))
 }
 
-/// The layers' side for a shadow map of `map_size`: a quarter of it (at
-/// least 64 texels), as the object map's. The rays read the layers only
+/// The layers' side for a shadow map of `map_size`: a quarter of it, at
+/// least 256 texels (or the map's own side, if smaller). The rays read the layers only
 /// behind the map's first surface, whose outline the map draws at its own
 /// size, and a march step's hit is confirmed at the ray's own point; on the
 /// generated suite the map's own side (at most 1024) gave the same median
 /// (0.0609 against 0.0606 for wedges, 0.0790 for pvm) at twice the pass's
 /// time (30-45 ms against 14-20 on the 40k-63k-triangle scenes, 96x96).
 pub fn side(map_size: u32) -> u32 {
-    (map_size / 4).max(64).min(map_size)
+    (map_size / 4).max(256).min(map_size)
 }
 
 fn record(frame: &mut Frame<'_>, pass: &SolidLayersPass, projection: &LightProjection, map_size: u32, solids: &[bool]) -> Result<Arc<SolidLayers>> {
