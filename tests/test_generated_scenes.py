@@ -67,6 +67,9 @@ SETTINGS: list[tuple[str, str, dict[str, Any]]] = [
     ("wedges upper bound", "wedges", {"map_bound": "upper"}),
     ("wedges independent", "wedges", {"occluders": "independent"}),
     ("wedges no solids", "wedges", {"map_solids": False}),
+    ("pvmf map bound", "pvmf", {"map_samples": 16}),
+    ("pvmf 32 rays", "pvmf", {"map_samples": 32}),
+    ("pvmf map bound no solids", "pvmf", {"map_samples": 16, "map_solids": False}),
     ("pvm no solids", "pvm", {"map_solids": False}),
 ]
 
@@ -235,6 +238,12 @@ MEASURED: dict[str, dict[str, float]] = {
     # The other choices of occluder_distance (docs/methods/pvmf.md): d_o from
     # the farthest enclosing edges (every scene's stray pixels under 0.5%, at
     # a higher median), and 5.2's, the mask's (the default before).
+    # The option map_samples (the map bound of pvm and the wedges, with
+    # map_solids, on the filtered pixels; docs/methods/pvmf.md): 16 and 32
+    # rays, and 16 without the solid layers.
+    "pvmf map bound": {"median": 0.0489, "worst": 0.1384, "median_stray": 0.0001, "worst_stray": 0.0128},
+    "pvmf 32 rays": {"median": 0.0446, "worst": 0.1168, "median_stray": 0.0001, "worst_stray": 0.0117},
+    "pvmf map bound no solids": {"median": 0.0489, "worst": 0.1731, "median_stray": 0.0001, "worst_stray": 0.0258},
     "pvmf farthest edge": {"median": 0.0786, "worst": 0.2374, "median_stray": 0.0001, "worst_stray": 0.0049},
     "pvmf nearest volume": {"median": 0.0615, "worst": 0.2094, "median_stray": 0.0003, "worst_stray": 0.0604},
     # With the map bound (map_samples=32 since this stop, 16 before; map_march=8, map_bound="both": the default since,
@@ -330,6 +339,24 @@ def test_the_solid_layers_lower_the_error_and_raise_it_nowhere(method: str, tabl
     more_stray = [s for s in SEEDS if on[s]["stray"] > off[s]["stray"] + 0.001]
     if len(lower) < 8 or higher or more_stray:
         fail_with_images(f"{method}: map_solids lower on {lower}, higher on {higher}, more stray pixels on {more_stray}", method, (higher + more_stray)[:3])
+
+
+def test_pvmf_map_bound_lowers_the_error_and_meets_more_of_the_bar(table: dict[str, dict[int, dict[str, float]]]) -> None:
+    """pvmf's option map_samples (16 rays; docs/methods/pvmf.md) against
+    its default (5.2's filter alone): measured lower on 31 scenes by more
+    than 0.001, higher on none, no stray share up; issue 28's bar missed on
+    2 scenes (2, 34) against 5 (1, 2, 34, 37, 38), and on 1 (2) with 32
+    rays; without the solid layers the bound still misses all 5. Held: lower
+    on at least 25, higher by more than 0.005 on none, the misses as measured
+    or fewer."""
+    on, off = table["pvmf map bound"], table["pvmf"]
+    lower = [s for s in SEEDS if on[s]["rmse"] < off[s]["rmse"] - 0.001]
+    worse = [s for s in SEEDS if on[s]["rmse"] > off[s]["rmse"] + 0.005]
+    more_stray = [s for s in SEEDS if on[s]["stray"] > off[s]["stray"] + 0.001]
+    if len(lower) < 25 or worse or more_stray:
+        fail_with_images(f"pvmf map bound: lower on {lower}, worse on {worse}, more stray pixels on {more_stray}", "pvmf map bound", (worse + more_stray)[:3])
+    missed = {name: within_half_of_hard(table, name) for name in ("pvmf map bound", "pvmf 32 rays")}
+    assert set(missed["pvmf map bound"]) <= {2, 34} and set(missed["pvmf 32 rays"]) <= {2}, missed
 
 
 def within_half_of_hard(table: dict[str, dict[int, dict[str, float]]], name: str) -> list[int]:

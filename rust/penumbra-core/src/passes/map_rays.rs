@@ -1,4 +1,4 @@
-//! The map bound (beyond the papers, issue 28) that `pvm` and `wedges`
+//! The map bound (beyond the papers, issue 28) that `pvm`, `wedges` and `pvmf`
 //! share: rays from a pixel to points of the light's disk followed through
 //! the centre's shadow map (passes/map_rays.wgsl), and their parameters.
 

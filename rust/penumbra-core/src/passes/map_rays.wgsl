@@ -2,7 +2,7 @@
 
 // Rays from a receiver to points of the light, followed through the
 // centre's shadow map (beyond the papers, issue 28): pvm's umbra_test "rim"
-// and map bound, and wedges' map bound.
+// and map bound, the wedges' map bound and pvmf's (an option).
 
 // v / |v| without overflow or underflow for any finite v (zero for zero):
 // scaled by its largest component first, so that the squares stay near 1.

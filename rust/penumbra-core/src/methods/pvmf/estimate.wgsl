@@ -1,5 +1,6 @@
 #import shaders/receiver.wgsl
 #import passes/pcf_taps.wgsl
+#import passes/map_rays.wgsl
 #import shaders/per_pixel.wgsl
 
 // PVMF pass 3 (Cournia 5.2): visibility estimation per camera pixel. Pixels
@@ -42,6 +43,8 @@ var<private> settings: PvmfSettings;
 @group(0) @binding(12) var farthest_distance: texture_2d_array<f32>;
 @group(0) @binding(13) var object_map: texture_2d_array<u32>;
 @group(0) @binding(14) var<storage, read> mesh_objects: array<u32>;
+// map_solids: the solid layers the map rays read (passes/solid_layers.rs).
+@group(0) @binding(15) var<storage, read> solid_layers: array<u32>;
 
 // d_o (5.2): the mean of the d_e channel over a 5 x 5 texel region (3 x 3
 // taps, 2 texels apart) around the receiver's projection, over texels that
@@ -256,6 +259,25 @@ fn shade(pixel: ScreenPixel) {
                     if (z_c > distances.x) {
                         v = min(v, filtered(r, p, vec2<u32>(pixel.px), d_r, z_c, filter_width(r, p, z_c)));
                     }
+                }
+                // map_samples (beyond 5.2, issue 28): at most what the map's
+                // rays leave seen (pvm's and the wedges' bound), and with
+                // map_bound = "both", where the map sees the centre, at
+                // least that. The filter counts the map's texels around the
+                // receiver's projection as if one occluder at d_o hid them;
+                // the rays follow the light's points through the map, and
+                // with map_solids through the closed casters behind it: a
+                // filter that reaches lit floor beside a caster lit the
+                // umbra at its contact (generated seeds 1, 37, 38). Their
+                // search starts at the surface hiding the centre, or at d_o.
+                let n_rays = pvmf.mode.z;
+                let lower = (settings.flags & 128u) != 0u && lit;
+                if (n_rays > 0u && (v > map_margin(n_rays) || lower)) {
+                    // d_r > 0: no surface touches the light; d_o at the
+                    // receiver's ray's light depth per distance.
+                    let d_o_depth = d_o * q.w / max(d_r, 1e-30);
+                    let d_start = select(map_depth(pvmf, shadow_map, q.xyz), d_o_depth, lit);
+                    v = map_bound(pvmf, shadow_map, p, q.w, d_start, n_rays, v, lower, pvmf.mode.w, vec4<f32>(0.0), d_o_depth, false);
                 }
                 // 5.3 blurs every filtered pixel; a filter narrower than
                 // blur_min_width texels left no jitter noise to hide.
