@@ -170,8 +170,9 @@ def test_the_tile_cull_skips_wedges_and_changes_no_pixel(renderer: penumbra.Rend
 # interpolation spreads: 0.108 at one pixel (0.0040; 0.034 at the scene's
 # own radius), while both images are 0.0363 from the exact visibility
 # (`triangle_masks`, 1024 samples; 0.0606 without map_solids). Refusing to
-# interpolate from pixels where the solid layers moved the bound keeps
-# 0.033, at 1.6x wedges' time on generated:1 and 38 at 256x256. Bounds:
+# interpolate from pixels where the map bound moved v keeps 0.033, at 1.52x
+# and 1.19x wedges' time on generated:1 and 38 at 256x256 (a build not
+# committed, timed against this one with benchmarks/ab_render_time.py). Bounds:
 # about twice those; and subsample's error against the exact visibility
 # within 0.001 of every pixel's.
 SUBSAMPLE_BOUNDS = {"sphere_on_plane": (0.01, 0.0002), "cube_on_plane": (0.01, 0.0003), "overlapping_casters": (0.2, 0.008), "resting_box": (1e-6, 1e-6)}

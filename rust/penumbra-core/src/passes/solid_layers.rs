@@ -19,8 +19,8 @@
 //! `casters.rs` would open them): each fragment inserts its depth into its
 //! texel's four slots with atomics (each slot keeps the least it has seen
 //! and passes the other on), dropping a depth within [`SAME_SURFACE`] of a
-//! kept one: a surface drawn twice (doubled, or in overlapping pieces)
-//! counts once. Depths are stored as the bits of their complement, so that
+//! kept one: a face drawn twice (overlapping pieces) counts once; a mesh
+//! that is a whole copy of another is not drawn ([`solid_meshes`]). Depths are stored as the bits of their complement, so that
 //! a cleared buffer (zeros) is empty and the slots keep the largest.
 //!
 //! Without solids, or when no method reads it, a 16-byte stand-in whose
@@ -212,8 +212,10 @@ fn solid_indices(ctx: &FrameContext<'_>, solids: &[bool]) -> Vec<u32> {
 /// belong to is closed (no edge with one face, none with more than two or
 /// two wound alike) and does not hold `light` (its winding number there,
 /// over its consistently wound faces, is below 1/2 in size). A mesh none of
-/// whose faces survived the weld (a duplicate) is its welded corners'
-/// surface's, as `SilhouetteCache::mesh_objects` takes it.
+/// whose faces survived the weld (a whole copy of another) is not drawn:
+/// its surface is there once already, and a second copy of every depth
+/// would take the layers' four slots two by two. Faces duplicated within
+/// drawn meshes (overlapping pieces) are dropped by the shader instead.
 pub fn solid_meshes(topology: &Topology, meshes: usize, light: DVec3) -> Vec<bool> {
     let n = topology.positions.len();
     let mut open = vec![false; n];
@@ -282,6 +284,14 @@ mod tests {
         // A face missing: open.
         let t = Topology::build(&v, &f[1..]);
         assert_eq!(solid_meshes(&t, 1, DVec3::new(0.0, 5.0, 0.0)), vec![false]);
+    }
+
+    #[test]
+    fn a_whole_copy_of_a_solid_is_not_drawn_twice() {
+        let (v, f) = octahedron(DVec3::ZERO, 1.0);
+        let parts = [crate::topology::Part { vertices: &v, faces: &f }, crate::topology::Part { vertices: &v, faces: &f }];
+        let t = Topology::from_parts(&parts, crate::topology::WELD_TOLERANCE);
+        assert_eq!(solid_meshes(&t, 2, DVec3::new(0.0, 5.0, 0.0)), vec![true, false]);
     }
 
     #[test]
