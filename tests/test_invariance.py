@@ -159,6 +159,30 @@ def test_every_form_of_a_closed_mesh_casts_the_welded_shadow(renderer: penumbra.
 
 
 @pytest.mark.gpu
+@pytest.mark.parametrize("seed", [1, 2, 37, 38])
+def test_reversed_casters_of_generated_scenes_cast_the_same_shadow(renderer: penumbra.Renderer, seed: int) -> None:
+    """Every caster of a generated scene re-wound (the boot's open, holed
+    surface, the teapots, a koala, a cube; two casters each): the ground
+    moves by no pixel for the map-based and volume methods (measured: none
+    moves by more than 0.1 on any of these seeds). The casters' own pixels
+    do change: surfaces are one-sided, as Mitsuba's diffuse surfaces are,
+    and a mesh without shading normals takes its face normals from the
+    winding, so its re-wound lit side faces away from the light."""
+    folder = scenes.meshes_folder()
+    if folder is None:
+        pytest.skip("the shared meshes (../shared/meshes or $PENUMBRA_MESHES) are absent")
+    base = scenes.generate(seed, width=SIZE, folder=folder)
+    rewound = penumbra.Scene([base.meshes[0], *[forms.reversed_windings(m) for m in base.meshes[1:]]], base.light, base.camera, ambient=base.ambient, name=base.name)
+    for method in ("hard", "pcss", "pvm", "pvmf", "wedges", "backprojection"):
+        welded = renderer.render(base, method, outputs=["visibility", "object_id"])
+        v = renderer.render(rewound, method, outputs=["visibility"]).visibility
+        moved = forms.moved_fraction(welded.visibility, v, welded.object_id == 0)
+        if moved > 0.0:
+            folder_out = leave_images(f"generated{seed}-{method}-reversed", v, welded.visibility, ARTIFACTS)
+            pytest.fail(f"generated:{seed}, {method}, every caster re-wound: {100 * moved:.2f}% of ground pixels moved by more than 0.1; images in {folder_out}")
+
+
+@pytest.mark.gpu
 @pytest.mark.parametrize("method", sorted(VOLUME_METHODS))
 def test_connectivity_stats_say_what_was_welded(renderer: penumbra.Renderer, method: str) -> None:
     path = MESHES / "spot.obj"
