@@ -52,7 +52,7 @@ def test_switch_and_defaults(cached: penumbra.Renderer, uncached: penumbra.Rende
         # n_blur 12 (the paper's; the default 0 runs no blur pass): every pass.
         r = uncached.render(s, "pvmf", map_size=MAP, n_blur=12)
         assert r.stats["pass_cache"] == 0 and r.stats["reused_passes"] == 0 and r.reused_passes == []
-        assert list(r.timings) == ["gbuffer", "shadow_map", "mask", "object_map", "estimation", "blur", "shading", "readback"]
+        assert list(r.timings) == ["gbuffer", "shadow_map", "mask", "solid_layers", "object_map", "estimation", "blur", "shading", "readback"]
     assert set(uncached.pass_cache_entries().values()) == {0}
 
 
@@ -62,8 +62,8 @@ def test_late_parameter_reuses_earlier_passes(cached: penumbra.Renderer) -> None
     first = cached.render(s, "pvmf", map_size=MAP, n_blur=4)
     assert first.stats["reused_passes"] == 0 and first.stats["pass_cache"] == 1
     second = cached.render(s, "pvmf", map_size=MAP, n_blur=8)
-    assert second.reused_passes == ["estimation", "gbuffer", "mask", "shadow_map"]
-    assert second.stats["reused_passes"] == 4
+    assert second.reused_passes == ["estimation", "gbuffer", "mask", "shadow_map", "solid_layers"]
+    assert second.stats["reused_passes"] == 5
     # Reused passes report no timing: they did not run.
     assert list(second.timings) == ["blur", "shading", "readback"]
     assert second.stats["shadow_maps_rendered"] == 0 and second.stats["silhouette_cache_hits"] == 0
@@ -120,17 +120,17 @@ def test_changes_invalidate(cached: penumbra.Renderer, uncached: penumbra.Render
     assert base.camera is not None
     variants: list[tuple[str, penumbra.Scene, dict[str, Any], list[str]]] = [
         ("geometry", moved_mesh, {}, []),
-        ("camera", base.with_camera(penumbra.Camera.look_at(np.add(base.camera.eye, 0.1), base.camera.target, width=SIZE, height=SIZE)), {}, ["mask", "object_map", "shadow_map"]),
+        ("camera", base.with_camera(penumbra.Camera.look_at(np.add(base.camera.eye, 0.1), base.camera.target, width=SIZE, height=SIZE)), {}, ["mask", "object_map", "shadow_map", "solid_layers"]),
         ("light centre", base.with_light(penumbra.SphereLight(np.add(light.center, 0.05), light.radius, intensity=light.intensity)), {}, ["gbuffer"]),
         # The light's maps cover the casters' penumbrae, which the radius sizes.
         ("light radius", base.with_light(light.with_radius(light.radius * 0.5)), {}, ["gbuffer"]),
         # Maps of 128 and 64 texels have object maps of the same 64 (object_map::side).
         ("map size", base, {"map_size": MAP // 2}, ["gbuffer", "object_map"]),
         # The object map is the first surface's, whatever the bias keeps.
-        ("bias", base, {"bias": "midpoint"}, ["gbuffer", "mask", "object_map"]),
-        ("s_e", base, {"s_e": 0.25}, ["gbuffer", "object_map", "shadow_map"]),
-        ("s_p", base, {"s_p": 1.0}, ["gbuffer", "mask", "object_map", "shadow_map"]),
-        ("seed", base, {"seed": 3}, ["gbuffer", "mask", "object_map", "shadow_map"]),
+        ("bias", base, {"bias": "midpoint"}, ["gbuffer", "mask", "object_map", "solid_layers"]),
+        ("s_e", base, {"s_e": 0.25}, ["gbuffer", "object_map", "shadow_map", "solid_layers"]),
+        ("s_p", base, {"s_p": 1.0}, ["gbuffer", "mask", "object_map", "shadow_map", "solid_layers"]),
+        ("seed", base, {"seed": 3}, ["gbuffer", "mask", "object_map", "shadow_map", "solid_layers"]),
     ]
     for what, s, params, expect in variants:
         p = {"map_size": MAP, **params}

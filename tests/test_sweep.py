@@ -45,8 +45,8 @@ def test_sweep_rows_columns_and_reuse(renderer: penumbra.Renderer) -> None:
     assert list(df["config"]) == [0, 1, 2] and set(df["method"]) == {"pvmf"} and set(df["scene"]) == {"scene"}
     assert list(df["n_blur"]) == [0, 4, 8] and list(df["map_size"]) == [MAP] * 3
     # The first configuration runs every pass; the others reuse all but the blur.
-    assert df["stat_reused_passes"].tolist() == [0, 4, 4]
-    assert df["reused"].tolist() == ["", "estimation,gbuffer,mask,shadow_map", "estimation,gbuffer,mask,shadow_map"]
+    assert df["stat_reused_passes"].tolist() == [0, 5, 5]
+    assert df["reused"].tolist() == ["", "estimation,gbuffer,mask,shadow_map,solid_layers", "estimation,gbuffer,mask,shadow_map,solid_layers"]
     assert not math.isnan(df["ms_mask"][0]) and df["ms_mask"][1:].isna().all()
     assert (df["total_ms"] > 0).all() and (df["worker_pid"] == os.getpid()).all()
     for row in df.itertuples():

@@ -89,7 +89,7 @@ class Timing:
 #: The repairs for real meshes (``repairs``, ``bias``, ``blur_min_width``)
 #: keep their defaults here.
 PAPER: dict[str, dict[str, Any]] = {
-    "pvmf": {"kernel": "square", "n_blur": 12, "offsets": "unit", "umbra": "filter", "s_e": 0.5, "mask_size": "map", "occluder_distance": "nearest_volume"},
+    "pvmf": {"kernel": "square", "n_blur": 12, "offsets": "unit", "umbra": "filter", "s_e": 0.5, "mask_size": "map", "occluder_distance": "nearest_volume", "map_samples": 0},
     # Fernando 2005: the plane test, uniform search taps, the mean blocker
     # depth, and the centre's test alone (no horizon repair).
     # Cournia 4.1.3 and 4.2: one edge per texel of a map-sized volume map,

@@ -148,13 +148,13 @@ pub struct PvmfParams {
     pub map: MapBound,
 }
 
-/// `map_samples`' default for pvmf: 0, 5.2's filter alone. The bound (an
-/// option, issue 28) took the generated suite's misses of issue 28's bar
-/// from 5 scenes to 2 at 16 rays and 1 at 32 (docs/methods/pvmf.md); as a
-/// default it would also end `map_size="auto"`'s claim of no accuracy lost
-/// against 2048 texels (tests/test_map_size.py: the bound gains more on the
-/// finer map), and its cost is measured there, not yet decided.
-pub const MAP_SAMPLES_DEFAULT: i64 = 0;
+/// `map_samples`' default for pvmf: 16 rays (beyond 5.2, issue 28; 0 is the
+/// paper's filter alone). On the generated suite the bound took the misses
+/// of issue 28's bar from 5 scenes to 2 and the median penumbra RMSE 0.0553
+/// -> 0.0489; it costs 1.2-1.8 times the filter's render at 256x256 and 1.8
+/// times at 1920x1080, still under `pcss`'s time (docs/methods/pvmf.md). 32
+/// rays misses 1 scene but costs 2.6 times at 1920x1080 (11 times `hard`).
+pub const MAP_SAMPLES_DEFAULT: i64 = 16;
 
 /// The values of `repairs`: cumulative, in the order docs/real_meshes.md
 /// measures them; "all" (the default) adds the local edge distance to the last.
@@ -243,10 +243,12 @@ fn estimate_uniforms(params: &PvmfParams, projection: &LightProjection, light: (
 }
 
 /// What pass 3 reads besides the G-buffer, the shadow map and the mask: its
-/// uniform blocks, bit for bit, and the comparison sampler.
+/// uniform blocks, bit for bit, the comparison sampler, and whether it reads
+/// the solid layers (map_solids; their own key is the centre map's, which
+/// the estimate's holds).
 pub fn estimate_key(params: &PvmfParams, projection: &LightProjection, light: ([f32; 3], f32), key: &mut PassKey) {
     let (test, settings) = estimate_uniforms(params, projection, light);
-    key.pod(&test).pod(&settings).bytes(params.filter.name().as_bytes());
+    key.pod(&test).pod(&settings).bytes(params.filter.name().as_bytes()).u32(u32::from(params.map.solids));
 }
 
 pub struct PenumbraVolumeMaskFiltering {
@@ -335,7 +337,7 @@ impl MethodParams for PvmfParams {
         ]);
         specs.extend(MapBound::specs(
             MAP_SAMPLES_DEFAULT,
-            "on the filtered pixels, points of the light's disk whose rays from the pixel are followed through the shadow map (as pvm's and the wedges'): the estimate is at most the fraction seen plus 1.2 n^-0.7 and the texel band at d_o; 0: 5.2's filter alone (the paper)",
+            "on the filtered pixels, points of the light's disk whose rays from the pixel are followed through the shadow map (as pvm's and the wedges'): the estimate is at most the fraction seen plus 1.2 n^-0.7 and the texel band at d_o (beyond the paper, the default since issue 28); 0: 5.2's filter alone (the paper)",
         ));
         specs
     }
@@ -420,11 +422,14 @@ impl Method for PenumbraVolumeMaskFiltering {
         let mut key = PassKey::new(ESTIMATION.name);
         key.key(&frame.ctx.gbuffer_key).key(&centre_map::centre_map_key(&frame.ctx, &params.shadow, &projection)).key(&mask_key);
         estimate_key(params, &projection, (light.center_f32, light.radius_f32), &mut key);
+        // The solid layers before the estimate's cache, as pvm's and the
+        // wedges': their `solid_meshes` stat is then the same whether the
+        // estimate is reused or not (tests/test_pass_cache.py).
+        let solids = solid_layers::record_if(frame, params.map.solids && params.map.samples > 0 && r > 0.0, &self.solid_pass, &projection, params.shadow.map_size)?;
         // The object map is a function of the centre map's key (geometry,
         // projection, map size), which the estimate's key holds.
         let estimate = frame.cached(ESTIMATION.name, key.finish(), |frame| {
             let objects = object_map::record_if(frame, params.repairs.horizon && r > 0.0, &self.object_pass, &projection, params.shadow.map_size)?;
-            let solids = solid_layers::record_if(frame, params.map.solids && params.map.samples > 0 && r > 0.0, &self.solid_pass, &projection, params.shadow.map_size)?;
             let estimate = PvmfEstimate {
                 raw: frame.ctx.screen_texture("pvmf::visibility_raw"),
                 blur_mask: frame.ctx.screen_texture("pvmf::blur_mask"),
