@@ -40,6 +40,7 @@ def world_gradient(result: penumbra.RenderResult) -> np.ndarray:
 
 
 def test_every_scene_renders_with_its_passes_stats_and_intermediates(renderer: penumbra.Renderer) -> None:
+    moved = 0
     for name in penumbra.scenes.names():
         scene = penumbra.scenes.get(name, width=64, height=64)
         renderer.clear_pass_cache()  # every pass runs, and is timed
@@ -56,10 +57,18 @@ def test_every_scene_renders_with_its_passes_stats_and_intermediates(renderer: p
         # The blur takes the filtered pixels whose filter spans a texel at least (blur_min_width).
         assert 0 < s["masked_pixels"] <= s["filtered_pixels"]
         assert 0 < s["blurred_pixels"] == int(result["pvmf_blur_mask"].sum()) <= s["filtered_pixels"]
+        # The paper's filter alone: no map bound, no solid layers read.
+        assert s["map_bounded_pixels"] == s["map_raised_pixels"] == 0 and "solid_meshes" not in s
+        # The defaults' bound moves filtered pixels, each one way, none on
+        # some scenes (the sphere's shadow is the filter's already).
+        d = renderer.render(scene, "pvmf", map_size=512).stats
+        assert d["solid_meshes"] >= 1 and d["map_bounded_pixels"] + d["map_raised_pixels"] <= d["filtered_pixels"], d
+        moved += d["map_bounded_pixels"] + d["map_raised_pixels"]
         assert ((result.visibility >= 0) & (result.visibility <= 1)).all()
         # Stored d_e is the light-to-edge distance: beyond the light's radius.
         d_e = result["pvmf_edge_distance"]
         assert (d_e[d_e > 0] > scene.light.radius).all()
+    assert moved > 0
 
 
 @pytest.mark.parametrize("name", penumbra.scenes.names())

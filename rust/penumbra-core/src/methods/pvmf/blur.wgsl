@@ -23,7 +23,8 @@ struct BlurSettings {
 // Per-invocation copies of the parameters, read once in `shade` (as in pcss/visibility.wgsl).
 var<private> blur: BlurSettings;
 @group(0) @binding(5) var destination: texture_storage_2d<r32float, write>;
-@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 3>;
+// COUNTERS in mod.rs; the blur adds to blurred_pixels alone.
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 5>;
 
 // Once per pixel inside the image (the entry point: shaders/per_pixel.wgsl).
 fn shade(pixel: ScreenPixel) {

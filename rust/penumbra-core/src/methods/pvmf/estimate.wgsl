@@ -35,8 +35,9 @@ var<private> settings: PvmfSettings;
 @group(0) @binding(8) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(9) var blur_mask_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(10) var filter_width_out: texture_storage_2d<r32float, write>;
-// masked, filtered, blurred pixels.
-@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>, 3>;
+// masked, filtered, blurred pixels, and those the map bound lowered and
+// raised (COUNTERS in mod.rs).
+@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>, 5>;
 // The object map and each mesh's object (passes/object_map.rs), for the horizon repair.
 // The largest d_e over far per mask texel (occluder_distance
 // "farthest_edge"; methods/pvmf/mask.wgsl's fs_mask_far), else unread.
@@ -277,7 +278,13 @@ fn shade(pixel: ScreenPixel) {
                     // receiver's ray's light depth per distance.
                     let d_o_depth = d_o * q.w / max(d_r, 1e-30);
                     let d_start = select(map_depth(pvmf, shadow_map, q.xyz), d_o_depth, lit);
-                    v = map_bound(pvmf, shadow_map, p, q.w, d_start, n_rays, v, lower, pvmf.mode.w, vec4<f32>(0.0), d_o_depth, false);
+                    let bounded = map_bound(pvmf, shadow_map, p, q.w, d_start, n_rays, v, lower, pvmf.mode.w, vec4<f32>(0.0), d_o_depth, false);
+                    if (bounded < v) {
+                        atomicAdd(&counters[3], 1u);
+                    } else if (bounded > v) {
+                        atomicAdd(&counters[4], 1u);
+                    }
+                    v = bounded;
                 }
                 // 5.3 blurs every filtered pixel; a filter narrower than
                 // blur_min_width texels left no jitter noise to hide.

@@ -178,8 +178,9 @@ crate::gpu_type! {
     }
 }
 
-/// Named counters, in the order of `methods/pvmf/estimate.wgsl`'s `counters`.
-pub const COUNTERS: [&str; 3] = ["masked_pixels", "filtered_pixels", "blurred_pixels"];
+/// Named counters, in the order of `methods/pvmf/estimate.wgsl`'s
+/// `counters`: the map bound's (`map_samples`) as pvm's and the wedges'.
+pub const COUNTERS: [&str; 5] = ["masked_pixels", "filtered_pixels", "blurred_pixels", "map_bounded_pixels", "map_raised_pixels"];
 
 /// The penumbra volume mask (pass 2).
 pub struct PvmfMask {
