@@ -461,6 +461,18 @@ def test_stats_intermediates_and_caches(renderer: penumbra.Renderer) -> None:
     assert renderer.render(moved, "pvm").stats["silhouette_cache_hits"] == 0
 
 
+@pytest.mark.parametrize("method", ["pvm", "pvmf", "wedges"])
+def test_the_solid_layers_fit_the_buffer_limit_at_large_maps(renderer: penumbra.Renderer, method: str) -> None:
+    """A cube map of 8192-texel faces wants layers of 2048 texels, 403 MB
+    (the storage-buffer limit is 128 MiB on lavapipe): the layers' side is
+    capped to what fits (solid_layers.rs `side`) instead of refusing the
+    render, as it did while every bound method read them."""
+    result = renderer.render(penumbra.scenes.get("wide_floor", width=32, height=32), method, map_size=8192, projection="cube", outputs=["visibility"])
+    side = result.stats["solid_layers_side"]
+    assert result.stats["solid_meshes"] >= 1 and 256 <= side <= 2048, result.stats
+    assert np.isfinite(result.visibility).all()
+
+
 def test_open_meshes_render_and_open_edges_error_refuses_them(renderer: penumbra.Renderer) -> None:
     base = penumbra.scenes.get(width=48, height=48)
     # The two grounds' bounding boxes differ (the slab has a bottom), so do

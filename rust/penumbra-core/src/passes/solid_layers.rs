@@ -133,14 +133,32 @@ pub fn record_if(frame: &mut Frame<'_>, needed: bool, pass: &SolidLayersPass, pr
 /// generated suite the map's own side (at most 1024) gave the same median
 /// (0.0609 against 0.0606 for wedges, 0.0790 for pvm) at twice the pass's
 /// time (30-45 ms against 14-20 on the 40k-63k-triangle scenes, 96x96).
-pub fn side(map_size: u32) -> u32 {
-    (map_size / 4).max(256).min(map_size)
+///
+/// At most the side whose buffer (`layers` map layers of [`LAYERS`] words a
+/// texel, after the header) fits `max_bytes`, the adapter's storage-buffer
+/// limit: a cube map of 8192-texel faces would want 2048-texel layers, 403
+/// MB against lavapipe's 128 MB, and takes 1182 (coarser layers find the
+/// same solids, their ends drawn in by more; the map's own texels still
+/// draw the outline).
+pub fn side(map_size: u32, layers: u32, max_bytes: u64) -> u32 {
+    let per_texel = 4 * u64::from(LAYERS) * u64::from(layers.max(1));
+    // The largest side whose texels fit beside the header: floor(sqrt(n)),
+    // corrected for the float's rounding.
+    let texels = max_bytes.saturating_sub(4 * u64::from(HEADER)) / per_texel;
+    let mut fit = (texels as f64).sqrt() as u64;
+    while fit * fit > texels {
+        fit -= 1;
+    }
+    while (fit + 1) * (fit + 1) <= texels {
+        fit += 1;
+    }
+    (map_size / 4).max(256).min(map_size).min(fit.min(u64::from(u32::MAX)) as u32).max(1)
 }
 
 fn record(frame: &mut Frame<'_>, pass: &SolidLayersPass, projection: &LightProjection, map_size: u32, solids: &[bool]) -> Result<Arc<SolidLayers>> {
-    let side = side(map_size);
+    let side = side(map_size, projection.layers(), frame.ctx.max_storage_buffer());
+    frame.stat("solid_layers_side", i64::from(side));
     let bytes = 4 * (u64::from(HEADER) + u64::from(LAYERS) * u64::from(side) * u64::from(side) * u64::from(projection.layers()));
-    frame.ctx.check_buffer("map_solids", "the solid layers", bytes, "map_size, or set map_solids=False")?;
     let mut key = PassKey::new(SOLID_LAYERS.name);
     key.bytes(&frame.ctx.geometry).projection(projection).u32(side);
     for &s in solids {
@@ -269,6 +287,21 @@ mod tests {
         let v = vec![c + DVec3::X * r, c - DVec3::X * r, c + DVec3::Y * r, c - DVec3::Y * r, c + DVec3::Z * r, c - DVec3::Z * r];
         let f = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
         (v, f)
+    }
+
+    #[test]
+    fn the_side_is_a_quarter_of_the_map_within_the_buffer_limit() {
+        let big = u64::MAX;
+        assert_eq!((side(2048, 1, big), side(512, 1, big), side(128, 1, big), side(16384, 1, big)), (512, 256, 128, 4096));
+        // lavapipe's 128 MiB: a cube of 8192-texel faces, a 16384 frustum.
+        let limit = 128 << 20;
+        for (map, layers, want) in [(8192, 6, 1182), (16384, 1, 2896), (2048, 6, 512)] {
+            let s = side(map, layers, limit);
+            let bytes = |s: u64| 4 * (u64::from(HEADER) + u64::from(LAYERS) * s * s * u64::from(layers));
+            assert!(s == want && bytes(u64::from(s)) <= limit, "{map} {layers}: {s}");
+            assert!(s == map / 4 || bytes(u64::from(s) + 1) > limit, "{map} {layers}: {s} is not the largest that fits");
+        }
+        assert_eq!(side(2048, 1, 0), 1);
     }
 
     #[test]
