@@ -85,6 +85,18 @@ fn edge_planes(e: &SilhouetteEdge, l: DVec3, r: f64) -> Option<EdgePlanes> {
     Some(EdgePlanes { n, outer, inner, d_outer, d_inner })
 }
 
+/// The sine of the angle between two neighbouring edges' planes below
+/// which they count as one plane (the coincident-plane rule). Their
+/// intersection line's direction is then set by rounding, not geometry: the
+/// two halves of a cube's edge (`cube.obj` splits each face 3 x 3), whose
+/// planes the f32 vertices turn against each other by 1e-7 to 3e-6 (and a
+/// soup's rounded corners by up to 2e-5), met along lines anywhere in the
+/// plane, which the cone test kept or not by chance: the soup of generated
+/// seed 38's cube moved 0.5% of `pvm`'s ground pixels against the welded
+/// cube (tests/test_pvm.py). A bend of 1e-4 radians moves the quad's far
+/// corner by 1e-4 of its reach, under a texel of any map here.
+const COINCIDENT_PLANES: f64 = 1e-4;
+
 /// Extrusion vector at vertex `v` shared by the planes with normals `n_in`
 /// (incoming edge) and `n_out` (outgoing edge), both through `v` (4.1.2),
 /// for a light of centre `l` and radius `r`; and whether the planes'
@@ -92,7 +104,7 @@ fn edge_planes(e: &SilhouetteEdge, l: DVec3, r: f64) -> Option<EdgePlanes> {
 fn extrusion(v: DVec3, n_in: DVec3, n_out: DVec3, d: DVec3, l: DVec3, r: f64, cone: bool) -> (DVec3, bool) {
     let line = n_out.cross(n_in);
     // Coincident (or nearly) planes: the paper's rule, away from the displaced light.
-    let mut dir = if line.length() < 1e-9 { (v - d).normalize_or_zero() } else { line.normalize() };
+    let mut dir = if line.length() < COINCIDENT_PLANES { (v - d).normalize_or_zero() } else { line.normalize() };
     // Cournia negates v^ when v1 lies in the negative half-space of (v0, v2, l);
     // that picks, of the two directions of the intersection line, the one that
     // continues the rays from the displaced light position d through v. We
