@@ -142,16 +142,8 @@ pub fn record_if(frame: &mut Frame<'_>, needed: bool, pass: &SolidLayersPass, pr
 /// draw the outline).
 pub fn side(map_size: u32, layers: u32, max_bytes: u64) -> u32 {
     let per_texel = 4 * u64::from(LAYERS) * u64::from(layers.max(1));
-    // The largest side whose texels fit beside the header: floor(sqrt(n)),
-    // corrected for the float's rounding.
-    let texels = max_bytes.saturating_sub(4 * u64::from(HEADER)) / per_texel;
-    let mut fit = (texels as f64).sqrt() as u64;
-    while fit * fit > texels {
-        fit -= 1;
-    }
-    while (fit + 1) * (fit + 1) <= texels {
-        fit += 1;
-    }
+    // The largest side whose texels fit beside the header.
+    let fit = (max_bytes.saturating_sub(4 * u64::from(HEADER)) / per_texel).isqrt();
     (map_size / 4).max(256).min(map_size).min(fit.min(u64::from(u32::MAX)) as u32).max(1)
 }
 

@@ -89,12 +89,14 @@ fn edge_planes(e: &SilhouetteEdge, l: DVec3, r: f64) -> Option<EdgePlanes> {
 /// which they count as one plane (the coincident-plane rule). Their
 /// intersection line's direction is then set by rounding, not geometry: the
 /// two halves of a cube's edge (`cube.obj` splits each face 3 x 3), whose
-/// planes the f32 vertices turn against each other by 1e-7 to 3e-6 (and a
-/// soup's rounded corners by up to 2e-5), met along lines anywhere in the
-/// plane, which the cone test kept or not by chance: the soup of generated
-/// seed 38's cube moved 0.5% of `pvm`'s ground pixels against the welded
-/// cube (tests/test_pvm.py). A bend of 1e-4 radians moves the quad's far
-/// corner by 1e-4 of its reach, under a texel of any map here.
+/// planes the f32 vertices and a soup's rounded corners turn against each
+/// other by far more than the 1e-9 this was, met along lines anywhere in the
+/// plane (along the edges themselves, for a soup), which the cone test kept
+/// or not by chance: the soup of generated seed 38's cube moved 0.5% of
+/// `pvm`'s ground pixels against the welded cube (tests/test_pvm.py; the
+/// test below). Taking a plane's own ray instead turns a corner by at most
+/// about the planes' angle, 1e-4 radians, a fifth of a 2048-texel map's
+/// texel across a 60-degree frustum.
 const COINCIDENT_PLANES: f64 = 1e-4;
 
 /// Extrusion vector at vertex `v` shared by the planes with normals `n_in`
@@ -354,6 +356,30 @@ mod tests {
         // Radius 0: all planes coincide with the hard-shadow plane; still finite.
         let vertices = penumbra_volumes(&edges, l, 0.0, 10.0, true).vertices;
         assert!(vertices.iter().all(|v| v.position.iter().all(|c| c.is_finite())));
+    }
+
+    #[test]
+    fn collinear_edges_rounded_apart_take_the_coincident_plane_rule() {
+        // Two halves of one straight edge, their far ends off its line by
+        // 1e-6 of its length (a soup's rounding), under a large light
+        // beyond the edge's near end, whose cone at the shared vertex holds
+        // directions near the edge's. Each half's extrusion there must be
+        // its own plane's ray from d, as for exactly collinear halves, not
+        // the planes' intersection, which rounding sets.
+        let l = DVec3::new(-2.0, 0.5, 0.0);
+        let (r, v) = (1.0, DVec3::new(0.5, 0.0, 0.0));
+        let first = SilhouetteEdge { a: DVec3::new(0.0, 0.0, 1e-6), b: v, ia: 0, ib: 1, component: 0 };
+        let second = SilhouetteEdge { a: v, b: DVec3::new(1.0, 1e-6, 0.0), ia: 1, ib: 2, component: 0 };
+        let (p0, p1) = (edge_planes(&first, l, r).unwrap(), edge_planes(&second, l, r).unwrap());
+        let line = p1.outer.cross(p0.outer);
+        assert!(line.length() > 1e-9 && line.length() < COINCIDENT_PLANES, "{}", line.length());
+        // The line, oriented as `extrusion` orients it, is no ray from d
+        // through v (it runs about 30 degrees off it) and lies in the cone.
+        let own = (v - p1.d_outer).normalize();
+        let u = if line.dot(own) < 0.0 { -line.normalize() } else { line.normalize() };
+        assert!(u.dot(own) < 0.99 && in_light_cone(v, u, p1.d_outer, l, r) == u, "{u} {own}");
+        let (dir, _) = extrusion(v, p0.outer, p1.outer, p1.d_outer, l, r, true);
+        assert!((dir - own).length() < 1e-9, "{dir} against {own}");
     }
 
     #[test]
