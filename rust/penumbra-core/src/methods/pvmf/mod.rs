@@ -151,9 +151,9 @@ pub struct PvmfParams {
 /// `map_samples`' default for pvmf: 16 rays (beyond 5.2, issue 28; 0 is the
 /// paper's filter alone). On the generated suite the bound took the misses
 /// of issue 28's bar from 5 scenes to 2 and the median penumbra RMSE 0.0553
-/// -> 0.0489; it costs 1.2-1.8 times the filter's render at 256x256 and 1.8
-/// times at 1920x1080, still under `pcss`'s time (docs/methods/pvmf.md). 32
-/// rays misses 1 scene but costs 2.6 times at 1920x1080 (11 times `hard`).
+/// -> 0.0489; it took the bench's median time over `hard` from 2.39 to 3.39
+/// at 256x256, and 4.79 to 8.11 at 1920x1080, under `pcss`'s 13.42
+/// (docs/methods/pvmf.md). 32 rays misses 1 scene but costs 12.95 there.
 pub const MAP_SAMPLES_DEFAULT: i64 = 16;
 
 /// The values of `repairs`: cumulative, in the order docs/real_meshes.md
