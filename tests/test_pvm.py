@@ -106,10 +106,12 @@ def bars_scene(*bars: tuple[float, float, float]) -> penumbra.Scene:
 def penumbra_errors(renderer: penumbra.Renderer, scene: penumbra.Scene) -> tuple[float, float, float, float]:
     """pvm's penumbra RMSE against `reference` at 1024 light samples in the
     middle columns, with edges "one" and "two", over the whole penumbra and
-    over the pixels where the two differ."""
+    over the pixels where the two differ: the edges' own construction,
+    without the map bound (which, since map_bound="solid", takes a closed
+    bar's one edge most of the way to the two: below)."""
     truth = renderer.render(scene, "reference", n_samples=1024).visibility[:, 60:100]
-    one = renderer.render(scene, "pvm", edges="one").visibility[:, 60:100]
-    two = renderer.render(scene, "pvm", edges="two").visibility[:, 60:100]
+    one = renderer.render(scene, "pvm", edges="one", map_samples=0).visibility[:, 60:100]
+    two = renderer.render(scene, "pvm", edges="two", map_samples=0).visibility[:, 60:100]
     region = (truth > 0.02) & (truth < 0.98)
     changed = region & (one != two)
     assert changed.sum() > 100, "the second edge decides somewhere"
@@ -135,13 +137,15 @@ def test_two_edges_are_exact_at_a_convex_corner(renderer: penumbra.Renderer) -> 
     triangle-and-segment branch of half_planes_fraction). One edge takes the
     plate for a half-plane (measured penumbra RMSE 0.114 against `reference`
     at 1024 samples on those pixels); two edges leave the union of their lit
-    sides, exact for a corner (0.0044)."""
+    sides, exact for a corner (0.0044). Both without the map bound: the
+    edges' own construction (with the bound, map_bound="solid", one edge
+    comes to 0.034)."""
     plate = box((0.0, 2.0, 0.0), (2.0, 0.1, 2.0), object_id=1, name="plate")
     camera = penumbra.Camera(eye=(0.0, 9.0, 0.5), target=(0.0, 0.0, 0.0), fov_y=30, width=160, height=160)
     scene = penumbra.Scene([ground_slab(), plate], penumbra.SphereLight((0.0, 6.0, 0.0), 0.8, intensity=60.0), camera)
     truth = renderer.render(scene, "reference", n_samples=1024).visibility
-    one = renderer.render(scene, "pvm", edges="one").visibility
-    two = renderer.render(scene, "pvm", edges="two").visibility
+    one = renderer.render(scene, "pvm", edges="one", map_samples=0).visibility
+    two = renderer.render(scene, "pvm", edges="two", map_samples=0).visibility
     changed = (truth > 0.02) & (truth < 0.98) & (one != two)
     assert changed.sum() > 200, "every corner's pixels"
     rmse = lambda v: float(np.sqrt(((v - truth)[changed] ** 2).mean()))
@@ -278,20 +282,69 @@ def test_the_map_bound_raises_k_where_the_map_sees_the_centre(renderer: penumbra
     raised (16 rays, margin 0.17: 0.0852, 189 raised; before `away`:
     0.0698 and 0.0873). Where the map hides the
     centre nothing moves (the rays are not trusted to raise k there: the
-    map cannot see what hides the light behind its first surface)."""
+    map cannot see what hides the light behind its first surface; the
+    default since, map_bound="solid", raises k there too behind a closed
+    caster's front: test_the_solid_bound_raises_k_behind_a_solid_front_only)."""
     w = 0.05
     camera = penumbra.Camera(eye=(0.0, 9.0, 0.5), target=(0.0, 0.0, 0.0), fov_y=12, width=128, height=128)
     scene = penumbra.Scene([ground_slab(), plate_outline([(-w, -w), (w, -w), (w, w), (-w, w)])], penumbra.SphereLight((0.0, 6.0, 0.0), 0.8, intensity=60.0), camera)
     truth = renderer.render(scene, "reference", n_samples=1024).visibility
     hard = renderer.render(scene, "hard").visibility
     upper = renderer.render(scene, "pvm", edges="two", map_bound="upper", map_samples=32)
-    both = renderer.render(scene, "pvm", edges="two", map_samples=32)
+    both = renderer.render(scene, "pvm", edges="two", map_bound="both", map_samples=32)
     lit = (truth > 0.02) & (truth < 0.98) & (hard > 0.5)
     rmse = lambda v: float(np.sqrt(((v - truth)[lit] ** 2).mean()))
     assert rmse(both.visibility) < 0.85 * rmse(upper.visibility), (rmse(upper.visibility), rmse(both.visibility))
     np.testing.assert_array_equal(both.visibility[hard < 0.5], upper.visibility[hard < 0.5])
     assert (both.visibility >= upper.visibility - 1e-6).all()
     assert both.stats["map_raised_pixels"] > 500 and upper.stats["map_raised_pixels"] == 0, (both.stats, upper.stats)
+
+
+def test_the_solid_bound_raises_k_behind_a_solid_front_only(renderer: penumbra.Renderer) -> None:
+    """A bar 0.2 wide and 0.2 thick at height 2 under a light of radius 0.8,
+    narrower than the light: with edges="one" (4.2's one half-plane) the
+    half-plane hides far more of the light than the bar does, also where
+    the map hides the light's centre, where map_bound="both" does not
+    raise k (the map holds the first surface alone). The bar is closed, so
+    the solid layers hold every surface behind the map's on the centre's
+    ray, and map_bound="solid" raises k there too: measured against
+    `reference` at 1024 samples on those penumbra pixels, 0.182 -> 0.026,
+    no pixel where the map sees the centre moved. The same bar open (its
+    bottom dropped) is no solid: a ray entering through a side the map
+    cannot see would be taken for seen, and "solid" changes nothing. Over
+    a wider bar below it, the centre's rays that cross both bars (to the
+    lower bar's top, or to the floor under both) fill the layers' four
+    surfaces (more may lie behind): nothing is raised beyond "both" there
+    (the floor past the lower bar's ends, under the upper one alone, is
+    raised)."""
+    camera = penumbra.Camera(eye=(0.0, 9.0, 0.5), target=(0.0, 0.0, 0.0), fov_y=30, width=128, height=128)
+    light = penumbra.SphereLight((0.0, 6.0, 0.0), 0.8, intensity=60.0)
+    bar = box((0.0, 2.0, 0.0), (0.2, 0.2, 3.0), object_id=1, name="bar")
+    vertices, faces = np.asarray(bar.vertices), np.asarray(bar.faces)
+    bottom = [i for i, f in enumerate(faces) if np.allclose(vertices[f][:, 1], vertices[:, 1].min())]
+    assert len(bottom) == 2
+    open_bar = penumbra.Mesh(vertices, np.delete(faces, bottom, axis=0), object_id=1, name="open_bar", transform=bar.transform)
+    lower_bar = box((0.0, 1.0, 0.0), (0.6, 0.2, 3.0), object_id=2, name="lower_bar")
+    under = lambda caster: renderer.render(penumbra.Scene([ground_slab(), caster], light, camera), "hard").visibility < 0.5
+    under_bar = under(bar)
+    for casters, raised in (([bar], True), ([open_bar], False), ([bar, lower_bar], False)):
+        scene = penumbra.Scene([ground_slab(), *casters], light, camera)
+        hard = renderer.render(scene, "hard").visibility
+        both = renderer.render(scene, "pvm", edges="one", map_samples=32, map_bound="both")
+        solid = renderer.render(scene, "pvm", edges="one", map_samples=32, map_bound="solid")
+        what = [c.name for c in casters]
+        np.testing.assert_array_equal(solid.visibility[hard > 0.5], both.visibility[hard > 0.5], err_msg=str(what))
+        if not raised:
+            kept = under_bar if len(casters) == 1 else under_bar & ((both.object_id == lower_bar.object_id) | under(lower_bar))
+            assert kept.sum() > 150, (what, kept.sum())
+            np.testing.assert_array_equal(solid.visibility[kept], both.visibility[kept], err_msg=str(what))
+            continue
+        truth = renderer.render(scene, "reference", n_samples=1024).visibility
+        hidden = (truth > 0.02) & (truth < 0.98) & (hard < 0.5)
+        rmse = lambda v: float(np.sqrt(((v - truth)[hidden] ** 2).mean()))
+        assert hidden.sum() > 300 and rmse(solid.visibility) < 0.3 * rmse(both.visibility), (hidden.sum(), rmse(both.visibility), rmse(solid.visibility))
+        assert (solid.visibility >= both.visibility - 1e-6).all()
+        assert solid.stats["map_raised_pixels"] > both.stats["map_raised_pixels"] + 300, (both.stats, solid.stats)
 
 
 @pytest.mark.parametrize("method", ["pvm", "wedges"])
@@ -365,17 +418,20 @@ def test_map_control_moves_k_by_the_points_the_map_alone_hides(renderer: penumbr
     0.107 without the bound, 0.074 with map_control=False (320 pixels
     lowered), 0.059 with it (606). With edges="chain" (the default) the
     walk decides those pixels, where the map sees the light's centre, and
-    map_control leaves its k to the plain bound (0.074 both)."""
+    map_control leaves its k to the plain bound (0.074 both). With
+    map_bound="both" and 16 rays, as measured: the default since,
+    map_bound="solid" with 32 rays, also raises k where the map hides the
+    centre behind the bars' fronts, and both come to about 0.06."""
     scene = bars_scene((2.5, -0.55, 0.9), (1.2, 0.55, 0.9))
     truth = renderer.render(scene, "reference", n_samples=1024).visibility
     region = (truth > 0.02) & (truth < 0.98)
     rmse = lambda v: float(np.sqrt(((v - truth)[region] ** 2).mean()))
-    plain = renderer.render(scene, "pvm", edges="two", map_control=False)
-    control = renderer.render(scene, "pvm", edges="two")
+    plain = renderer.render(scene, "pvm", edges="two", map_control=False, map_bound="both", map_samples=16)
+    control = renderer.render(scene, "pvm", edges="two", map_bound="both", map_samples=16)
     assert rmse(control.visibility) < 0.85 * rmse(plain.visibility), (rmse(plain.visibility), rmse(control.visibility))
     assert control.stats["map_bounded_pixels"] > plain.stats["map_bounded_pixels"] > 250, (plain.stats, control.stats)
-    chain = renderer.render(scene, "pvm").visibility
-    np.testing.assert_array_equal(renderer.render(scene, "pvm", map_control=False).visibility, chain)
+    chain = renderer.render(scene, "pvm", map_bound="both", map_samples=16).visibility
+    np.testing.assert_array_equal(renderer.render(scene, "pvm", map_control=False, map_bound="both", map_samples=16).visibility, chain)
 
 
 def test_the_rim_test_darkens_an_umbra_under_a_nearer_caster(renderer: penumbra.Renderer) -> None:
@@ -540,13 +596,17 @@ def test_non_manifold_casters_take_the_one_side_test(renderer: penumbra.Renderer
     test's own meaning, topology.rs). The fin lies inside the box and the
     light's centre cannot see its open edges, so the finned box casts the
     clean box's shadow; open_edges='error' refuses it, naming the mesh and
-    the edge count. A doubled box is one box, even with open_edges='error'."""
+    the edge count. A doubled box is one box, even with open_edges='error'.
+    With map_bound="both": the clean box is a solid and the finned one not
+    (the fin breaks the parity the solid layers count), so "solid", the
+    default, raises the clean box's k where the map hides the centre and
+    not the finned one's (one pixel of 2304 by 0.05, measured)."""
     base = penumbra.scenes.get(width=48, height=48)
     bar, fin = finned_box()
     with pytest.raises(penumbra.MeshError, match=r"mesh 'finned'.*not a 2-manifold: 1 edges.*open_edges='silhouette'"):
         renderer.render(penumbra.Scene([ground_slab(), fin], base.light, base.camera), method, open_edges="error")
-    clean = renderer.render(penumbra.Scene([ground_slab(), bar], base.light, base.camera), method)
-    finned = renderer.render(penumbra.Scene([ground_slab(), fin], base.light, base.camera), method)
+    clean = renderer.render(penumbra.Scene([ground_slab(), bar], base.light, base.camera), method, map_bound="both")
+    finned = renderer.render(penumbra.Scene([ground_slab(), fin], base.light, base.camera), method, map_bound="both")
     seen = lambda r: r.stats["silhouette_edges"] - r.stats["hidden_silhouette_edges"]  # noqa: E731
     assert seen(finned) == seen(clean) and finned.stats["duplicate_faces_ignored"] == 1
     # The same edges, listed in another order (those that are not two-sided
@@ -556,7 +616,7 @@ def test_non_manifold_casters_take_the_one_side_test(renderer: penumbra.Renderer
     # The copy is another object in the G-buffer where it wins the depth
     # tie, which pvmf's ID-aware blur (5.3) keeps apart: measured 2.3e-4 at
     # most with pvm, 0.009 at one pixel with pvmf.
-    doubled = renderer.render(penumbra.Scene([ground_slab(), bar, bar], base.light, base.camera), method, open_edges="error")
+    doubled = renderer.render(penumbra.Scene([ground_slab(), bar, bar], base.light, base.camera), method, open_edges="error", map_bound="both")
     np.testing.assert_allclose(doubled.visibility, clean.visibility, atol=1e-3 if method == "pvm" else 2e-2)
 
 

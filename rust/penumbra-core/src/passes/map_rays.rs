@@ -4,10 +4,10 @@
 
 use crate::params::{ParamSet, ParamSpec};
 
-/// `pvm`'s `map_samples` default: 16 points (32 lower the generated median
-/// further, 0.0802 -> 0.0728, at 2.42 against 2.23 times `hard`:
-/// docs/methods/pvm.md). `wedges` takes 32 (`methods/wedges/mod.rs`).
-pub const SAMPLES_DEFAULT: i64 = 16;
+/// `pvm`'s `map_samples` default: 32 points since issue 28's stop 64, with
+/// `map_bound = "solid"` (16 before: docs/methods/pvm.md has both). `wedges`
+/// takes 32 too (`methods/wedges/mod.rs`), `pvmf` 16.
+pub const SAMPLES_DEFAULT: i64 = 32;
 /// `map_march`'s default: 8 light depths (4 and 16 did worse: docs/methods/pvm.md).
 pub const MARCH_DEFAULT: i64 = 8;
 
@@ -23,6 +23,10 @@ pub struct MapBound {
     /// visibility is also at least the rays' fraction less the margin;
     /// `"upper"`: at most the fraction plus it, only.
     pub both: bool,
+    /// `map_bound = "solid"`: `both`, and also where the surface hiding the
+    /// light's centre is a solid caster's front (`solid_in_front` in
+    /// passes/map_rays.wgsl; needs `map_solids` and `map_march` > 0).
+    pub solid: bool,
     /// Light depths at which a ray the map's search leaves seen is sampled
     /// again (`ray_marched_hidden`; 0: the search alone).
     pub march: u32,
@@ -40,16 +44,19 @@ impl MapBound {
             ParamSpec::int("map_samples", samples, 0, 256, samples_doc),
             // Where the map sees the light's centre, an edge model may hide
             // more of the light than the caster does (the far tip of a
-            // grazing shadow, where the caster ends along its edge). Where
-            // the map hides the centre the rays are not trusted to raise the
-            // visibility: a surface the map cannot see (a boot's toe seen
-            // from below, generated seed 38) leaves them seen, and the umbra
-            // would be lit (docs/methods/pvm.md).
+            // grazing shadow, where the caster ends along its edge), and so
+            // it may where it hides it. There the rays are trusted to raise
+            // the visibility only behind a solid caster's front whose
+            // layers hold every surface behind it ("solid", the default
+            // since issue 28's stop 64): a surface the map cannot see (a
+            // boot's toe seen from below, generated seed 38; the inside of
+            // an open shell) leaves them seen, and "both" before the solid
+            // layers lit such umbrae (docs/methods/pvm.md).
             ParamSpec::choice(
                 "map_bound",
-                "both",
-                &["upper", "both"],
-                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1.2 n^-0.7 and the texel band (the share of the light whose rays pass within a map texel of the occluder's outline); both, and where the shadow map sees the light's centre, at least the fraction less that",
+                "solid",
+                &["upper", "both", "solid"],
+                "with map_samples > 0: upper, the visibility is at most the map's fraction plus 1.2 n^-0.7 and the texel band (the share of the light whose rays pass within a map texel of the occluder's outline); both, and where the shadow map sees the light's centre, at least the fraction less that; solid, both, and also where the surface hiding the light's centre is the front of a closed caster whose layers (map_solids) hold every surface behind it on the centre's ray (with map_march > 0; else as both)",
             ),
             // The search jumps from surface to surface as the map shows them
             // and passes by what lies between: the rays' seen fraction errs
@@ -77,7 +84,13 @@ impl MapBound {
         Self {
             // Within the specs' ranges.
             samples: p.int("map_samples").clamp(0, 256) as u32,
-            both: p.choice("map_bound") == "both",
+            both: matches!(p.choice("map_bound"), "both" | "solid"),
+            // The search alone passes by surfaces (its seen fraction errs
+            // high, most in the inner penumbra, where the map hides the
+            // centre): without the march its rays lifted a straight edge's
+            // exact k (tests/test_pvm.py's straight edges), and "solid"
+            // raises no more than "both".
+            solid: p.choice("map_bound") == "solid" && p.int("map_march") > 0,
             march: p.int("map_march").clamp(0, 64) as u32,
             solids: p.bool("map_solids"),
         }

@@ -118,6 +118,37 @@ fn solid_stretch(t: ShadowTest, q: vec3<f32>, z0: f32, z1: f32) -> f32 {
     return -1.0;
 }
 
+// map_bound = "solid" (beyond the papers, issue 28): whether the surface
+// the map holds at light depth d on the centre's ray through q is the
+// front of a solid caster whose layers hold every surface behind it there:
+// the first surface the solid layers hold (within 2 of the layers' texels,
+// as `solid_stretch` draws its ends in), with fewer than four surfaces on
+// that ray (four fill the layers, and more may lie behind: a hollow
+// teapot's walls, generated seed 2). Behind such a front the layers see
+// what the map does not, so the map's rays may raise the visibility there
+// too; behind an open surface (a scan, an aeroplane with its windows cut
+// out) a ray entering through a side the map cannot see would be taken
+// for seen. No layers (none solid, or map_solids off): false.
+fn solid_in_front(t: ShadowTest, q: vec3<f32>, d: f32) -> bool {
+    let side = solid_layers[0];
+    if (side == 0u) {
+        return false;
+    }
+    let m = light_map_point(t.light_space, q);
+    if (!layer_active(t.light_space, m.layer)) {
+        return false;
+    }
+    let c = map_texel(vec2<u32>(side), map_point_in(t.light_space, m, vec2<u32>(side)));
+    let base = SOLID_HEADER + ((u32(m.layer) * side + u32(c.y)) * side + u32(c.x)) * SOLID_LAYERS;
+    let exit = solid_layers[base + 1u];
+    if (exit == 0u || solid_layers[base + SOLID_LAYERS - 1u] != 0u) {
+        return false;
+    }
+    // depth.z is the map's side in texels (> 0); side > 0 here.
+    let margin = 2.0 * light_texel_size(t.light_space, d) * (t.light_space.depth.z / f32(side));
+    return abs(bitcast<f32>(~solid_layers[base]) - d) <= margin && d < bitcast<f32>(~exit);
+}
+
 // Whether the ray from p (light depth `depth`) to the light point `goal`
 // (light depth `d_goal`) passes inside a solid caster between its light
 // depths z0 <= z1, as the layers under its point at depth `z` show: where

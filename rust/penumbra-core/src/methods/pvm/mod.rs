@@ -209,7 +209,7 @@ impl MethodParams for PvmParams {
         .into_iter()
         .chain(MapBound::specs(
             map_rays::SAMPLES_DEFAULT,
-            "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.17 at 16: the points' own error under a straight edge) and the texel band; 0: the edge's k alone (4.2)",
+            "inside a volume, points of the light's disk whose rays from the pixel are followed through the shadow map (as umbra_test rim's): the visibility is at most the fraction seen plus 1.2 n^-0.7 (0.106 at 32, 0.17 at 16: the points' own error under a straight edge) and the texel band; 0: the edge's k alone (4.2)",
         ))
         .chain([
             // A control variate (issue 28): the spiral's error under a
@@ -313,7 +313,8 @@ impl Method for PenumbraVolumeMaps {
                 | (u32::from(params.rim_test) << 5)
                 | (u32::from(params.chain_edges) << 6)
                 | (u32::from(params.map.both) << 7)
-                | (u32::from(params.map_control) << 8);
+                | (u32::from(params.map_control) << 8)
+                | (u32::from(params.map.solid) << 9);
             let mut test = params.shadow.uniform(&projection, light.center_f32, light.radius_f32, flags);
             [test.mode[2], test.mode[3]] = params.map.mode();
             let uniforms = ctx.parameters("pvm::visibility_uniforms", &test);

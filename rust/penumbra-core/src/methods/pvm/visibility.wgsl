@@ -25,7 +25,7 @@ struct EdgePoints {
 // mode.y bit 0: falloff; bit 1: repair "centre"; bit 2: repair "horizon";
 // bit 3: edges = "two" (the far edge map below is read); bit 4: lookup = "3x3";
 // bit 5: umbra_test = "rim"; bit 6: edges = "chain"; bit 7: map_bound =
-// "both"; bit 8: map_control. mode.z: map_samples; mode.w: map_march.
+// "both" (or "solid"); bit 8: map_control; bit 9: map_bound = "solid". mode.z: map_samples; mode.w: map_march.
 @group(0) @binding(6) var<storage, read> pvm: ShadowTest;
 @group(0) @binding(7) var visibility_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var membership_out: texture_storage_2d<r32float, write>;
@@ -649,7 +649,7 @@ fn shade(pixel: ScreenPixel) {
                     // sees the centre, at least that. Their search starts at
                     // the surface hiding the centre, or where the centre is
                     // seen at the edge.
-                    let lower = (pvm.mode.y & 128u) != 0u && centre_lit;
+                    let lower = (pvm.mode.y & 128u) != 0u && (centre_lit || ((pvm.mode.y & 512u) != 0u && solid_in_front(pvm, q.xyz, centre_depth)));
                     if (pvm.mode.z > 0u && (k > map_margin(pvm.mode.z) || lower)) {
                         let edge_depth = light_view_depth(pvm.light_space, 0.5 * (edge.h0.xyz + edge.h1.xyz));
                         var d_start = centre_depth;

@@ -23,7 +23,8 @@ struct PvmfSettings {
     // bit 0: disk kernel (else the paper's square); bit 1: skip pixels that
     // fail the shadow-map test outside every volume (else filter them, 5.2);
     // bit 2: repair "horizon"; bit 3: estimate "area"; bit 4: blocker_test
-    // "behind"; bit 5: occluder_distance "farthest_edge"; bit 6: "darker".
+    // "behind"; bit 5: occluder_distance "farthest_edge"; bit 6: "darker";
+    // bit 7: map_bound "both" (or "solid"); bit 8: map_bound "solid".
     flags: u32,
     // The blur takes only pixels whose w_pcf is at least this many texels.
     blur_min_width: f32,
@@ -264,7 +265,8 @@ fn shade(pixel: ScreenPixel) {
                 // map_samples (beyond 5.2, issue 28): at most what the map's
                 // rays leave seen (pvm's and the wedges' bound), and with
                 // map_bound = "both", where the map sees the centre, at
-                // least that. The filter counts the map's texels around the
+                // least that (with "solid" also where a solid caster's front
+                // hides it). The filter counts the map's texels around the
                 // receiver's projection as if one occluder at d_o hid them;
                 // the rays follow the light's points through the map, and
                 // with map_solids through the closed casters behind it: a
@@ -272,7 +274,7 @@ fn shade(pixel: ScreenPixel) {
                 // umbra at its contact (generated seeds 1, 37, 38). Their
                 // search starts at the surface hiding the centre, or at d_o.
                 let n_rays = pvmf.mode.z;
-                let lower = (settings.flags & 128u) != 0u && lit;
+                let lower = (settings.flags & 128u) != 0u && (lit || ((settings.flags & 256u) != 0u && solid_in_front(pvmf, q.xyz, map_depth(pvmf, shadow_map, q.xyz))));
                 if (n_rays > 0u && (v > map_margin(n_rays) || lower)) {
                     // d_r > 0: no surface touches the light; d_o at the
                     // receiver's ray's light depth per distance.

@@ -236,7 +236,8 @@ fn estimate_uniforms(params: &PvmfParams, projection: &LightProjection, light: (
         | (u32::from(params.behind) << 4)
         | (u32::from(params.occluder_distance == OccluderDistance::FarthestEdge) << 5)
         | (u32::from(params.occluder_distance == OccluderDistance::Darker) << 6)
-        | (u32::from(params.map.both) << 7);
+        | (u32::from(params.map.both) << 7)
+        | (u32::from(params.map.solid) << 8);
     let mut test = test;
     [test.mode[2], test.mode[3]] = params.map.mode();
     let settings = SettingsUniform { s_p: params.s_p as f32, n_pcf: params.n_pcf, seed: params.seed as u32, flags, blur_min_width: params.blur_min_width as f32 };

@@ -356,7 +356,8 @@ impl Method for PenumbraWedges {
                 | (u32::from(coverage) << 3)
                 | (u32::from(params.overlap_gate) << 4)
                 | (u32::from(params.independent_occluders) << 5)
-                | (u32::from(params.map.both) << 6);
+                | (u32::from(params.map.both) << 6)
+                | (u32::from(params.map.solid) << 7);
             let mut shadow_test = params.shadow.uniform(&projection, light.center_f32, light.radius_f32, 0);
             [shadow_test.mode[2], shadow_test.mode[3]] = params.map.mode();
             let test = ctx.parameters("wedges::shadow_test", &shadow_test);

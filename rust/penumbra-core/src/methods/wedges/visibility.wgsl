@@ -31,7 +31,7 @@ struct WedgeSettings {
     // x: tile size in pixels; y: tiles per row; z: flags (bit 0: falloff,
     // bit 1: repair "horizon", bit 2: hard_term "lit_side", bit 3: intensity
     // "coverage", bit 4: overlap "gate", bit 5: occluders "independent",
-    // bit 6: map_bound "both"); w: wedge count. wedge_test.mode.z: map_samples;
+    // bit 6: map_bound "both" or "solid", bit 7: "solid"); w: wedge count. wedge_test.mode.z: map_samples;
     // wedge_test.mode.w: map_march.
     tiles: vec4<u32>,
     // subsample (beyond both papers, issue 30): x: the largest shift, in
@@ -469,10 +469,11 @@ fn evaluate(pixel: ScreenPixel, reach: f32) -> Evaluated {
             }
             // map_samples (beyond both papers, issue 28): at most what the
             // map's rays leave seen, and with map_bound = "both", where the
-            // map sees the centre, at least that (pvm's bound). Their search
+            // map sees the centre, at least that (pvm's bound; with "solid"
+            // also where a solid caster's front hides it). Their search
             // starts at the surface hiding the centre, or at the holding
             // edge nearest the light.
-            let lower = (settings.tiles.z & 64u) != 0u && hard > 0.0;
+            let lower = (settings.tiles.z & 64u) != 0u && (hard > 0.0 || ((settings.tiles.z & 128u) != 0u && solid_in_front(wedge_test, q.xyz, map_depth(wedge_test, shadow_map, q.xyz))));
             if (inside && wedge_test.mode.z > 0u && (v > map_margin(wedge_test.mode.z) || lower)) {
                 var d_start = map_depth(wedge_test, shadow_map, q.xyz);
                 if (hard > 0.0) {
