@@ -169,13 +169,17 @@ def test_first_command_compares_every_method(needs_mitsuba_and_gpu: None, tmp_pa
     # (raytraced, triangle_masks) to within the truth's own noise (their
     # order among themselves is that noise's: 2e-5 apart here). So is pvm,
     # whose Eq. 4.1 fraction is all but exact on this one smooth silhouette
-    # (0.0100 against reference's 0.0087 with the truth at 1024 spp, the
+    # (0.0088 against reference's 0.0087 with the truth at 1024 spp, the
     # README's first block): 0.0243 against 0.0247 here, the noise 0.024.
+    # So is wedges since map_bound="solid" (issue 28's stop 64): its
+    # coverage, held by the map's rays on both sides of the hard-shadow
+    # line, came to 0.0239 (pvm 0.0233, reference 0.0247, measured).
     errors = {m["method"]: m["metrics"]["visibility_rmse_penumbra"] for m in figures["methods"]}
     noise = figures["methods"][0]["metrics"]["noise_visibility_rmse_penumbra"]
     exact = ("reference", "raytraced", "triangle_masks")
-    assert errors["reference"] < min(e for name, e in errors.items() if name not in (*exact, "pvm")), errors
-    assert abs(errors["pvm"] - errors["reference"]) <= noise, (errors, noise)
+    level = ("pvm", "wedges")
+    assert errors["reference"] < min(e for name, e in errors.items() if name not in (*exact, *level)), errors
+    assert all(abs(errors[name] - errors["reference"]) <= noise for name in level), (errors, noise)
     assert all(abs(errors[name] - errors["reference"]) <= noise for name in exact), (errors, noise)
 
 

@@ -84,11 +84,17 @@ def test_auto_costs_no_accuracy_on_the_built_in_scenes(renderer: penumbra.Render
         # (measured 0.0563 against 0.0510, 0.0433 against 0.0381). The claim
         # holds for the filter, and auto with the bound keeps the filter's
         # accuracy at 2048 (below).
-        params = {"map_samples": 0} if method == "pvmf" else {}
+        # pvm's likewise since map_bound="solid" and 32 rays became its
+        # defaults (issue 28's stop 64): cube_on_plane 0.0484 at auto
+        # against 0.0416 at 2048, overlapping_casters 0.0420 against 0.0360
+        # (measured; lower at auto than the defaults before, 0.0487 and
+        # 0.0460, docs/scaling.md).
+        params = {"map_samples": 0} if method in ("pvm", "pvmf") else {}
         auto = renderer.render(scene, method, map_size="auto", outputs=["visibility"], **params)
         assert auto.stats["map_size"] < 2048, (method, auto.stats["map_size"])
         e_auto = metrics.rmse(auto.visibility, gt.visibility, region)
         e_fixed = error(method, 2048, **params)
         assert e_auto <= e_fixed + noise, f"{name} {method}: auto ({auto.stats['map_size']}) {e_auto:.4f} > 2048 {e_fixed:.4f} + noise {noise:.4f}"
-    e_bound, e_filter = error("pvmf", "auto"), error("pvmf", 2048, map_samples=0)
-    assert e_bound <= e_filter + noise, f"{name} pvmf: auto with the bound {e_bound:.4f} > the filter at 2048 {e_filter:.4f} + noise {noise:.4f}"
+    for method in ("pvm", "pvmf"):
+        e_bound, e_own = error(method, "auto"), error(method, 2048, map_samples=0)
+        assert e_bound <= e_own + noise, f"{name} {method}: auto with the bound {e_bound:.4f} > without it at 2048 {e_own:.4f} + noise {noise:.4f}"
